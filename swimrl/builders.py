@@ -1,0 +1,56 @@
+"""Build flows, environments and runtime settings from a validated Hydra config."""
+
+from __future__ import annotations
+
+import os
+
+import torch
+from omegaconf import DictConfig
+
+from swimrl.config import EnvParams, resolve_device, resolve_dtype, validate_flow_cfg
+from swimrl.env import SwimmerEnv
+from swimrl.flows.fields import GriddedFlow
+from swimrl.flows.stochastic import StochasticFlow
+from swimrl.integrator import KERNELS
+
+
+def setup_runtime(cfg: DictConfig) -> tuple[torch.device, torch.dtype]:
+    """Validate device/dtype/threads/kernel and apply the thread count."""
+    device = resolve_device(str(cfg.device))
+    dtype = resolve_dtype(str(cfg.dtype))
+    if str(cfg.kernel) not in KERNELS:
+        raise ValueError(f"kernel={cfg.kernel!r} is invalid: allowed {list(KERNELS)}")
+    threads = cfg.get("threads")
+    if threads is not None and int(threads) < 1:
+        raise ValueError(f"threads={threads} is invalid: allowed null or an integer >= 1")
+    torch.set_num_threads(int(threads) if threads else (os.cpu_count() or 1))
+    return device, dtype
+
+
+def build_flow(
+    cfg_flow: DictConfig, n_flows: int, device, dtype, generator: torch.Generator
+) -> GriddedFlow:
+    """The flow backend named by ``flow.name``, with ``n_flows`` realisations."""
+    validate_flow_cfg(cfg_flow)
+    if cfg_flow.name == "stochastic":
+        return StochasticFlow(
+            n_flows,
+            kubo=float(cfg_flow.kubo),
+            n_modes=int(cfg_flow.n_modes),
+            n_grid=int(cfg_flow.n_grid),
+            spacing=float(cfg_flow.spacing),
+            device=device,
+            dtype=dtype,
+            generator=generator,
+        )
+    raise ValueError(f"flow.name={cfg_flow.name!r} is not available in this build")
+
+
+def build_env(
+    cfg: DictConfig, n_flows: int, n_swimmers: int, seed: int, device, dtype
+) -> SwimmerEnv:
+    """Environment of ``n_flows x n_swimmers`` swimmers; all randomness from ``seed``."""
+    params = EnvParams.from_cfg(cfg)
+    gen = torch.Generator(device=device).manual_seed(int(seed))
+    flow = build_flow(cfg.flow, n_flows, device, dtype, gen)
+    return SwimmerEnv(flow, n_swimmers, params, generator=gen, kernel=str(cfg.kernel))

@@ -1,0 +1,191 @@
+r"""``swimrl-compare`` and ``swimrl-naive-scan``: several strategies on identical flows.
+
+Every strategy is evaluated with the same ``seed``, hence on the same flow realisations and
+from the same initial positions and orientations (common random numbers). Besides each
+strategy's ``R_hat`` (mean +- SEM over flows) the table reports the ratio of its mean
+``R_hat`` to the first strategy's, with the paired standard error (delta method).
+Outputs in the run directory: ``comparison.json``, ``comparison.md`` and,
+for a scan of constant shape factors, ``naive_scan.png`` (``R_hat`` against ``Lambda``).
+
+    swimrl-compare flow.kubo=10                      # naive vs STO (the README main job)
+    swimrl-naive-scan flow.kubo=10                   # constant Lambda over [-0.98, 0.98]
+"""
+
+from __future__ import annotations
+
+import copy
+import json
+import logging
+import math
+
+import hydra
+import numpy as np
+from omegaconf import DictConfig, OmegaConf, open_dict
+
+from swimrl.evaluate import evaluate, summary_line, validate_eval_cfg
+from swimrl.paths import CONF_DIR, run_dir
+
+log = logging.getLogger(__name__)
+
+
+def strategy_variants(cfg: DictConfig) -> list[tuple[str, DictConfig]]:
+    """(label, strategy config) for ``compare.strategies``; ``naive`` expands over
+    ``compare.naive_shape_factors`` and ``minimal`` takes ``compare.minimal`` coefficients."""
+    out = []
+    for name in cfg.compare.strategies:
+        if name == "naive":
+            for lam in cfg.compare.naive_shape_factors:
+                out.append(
+                    (
+                        f"naive({float(lam):+.2f})",
+                        OmegaConf.create({"name": "naive", "shape_factor": float(lam)}),
+                    )
+                )
+        elif name == "sto":
+            out.append(("sto", OmegaConf.create({"name": "sto"})))
+        elif name == "minimal":
+            out.append(("minimal", OmegaConf.create({"name": "minimal", **cfg.compare.minimal})))
+        else:
+            raise ValueError(f"compare.strategies has {name!r}: allowed 'naive', 'sto', 'minimal'")
+    if not out:
+        raise ValueError("compare.strategies is empty: allowed a list of 'naive', 'sto', 'minimal'")
+    return out
+
+
+def compare(cfg: DictConfig) -> dict:
+    """Evaluate all variants (validated first) and return the comparison record."""
+    variants = strategy_variants(cfg)
+    cfgs = []
+    for _, strat in variants:
+        c = copy.deepcopy(cfg)
+        with open_dict(c):
+            c.strategy = strat
+        validate_eval_cfg(c)
+        evaluate_check_strategy(c)
+        cfgs.append(c)
+    results = []
+    for (label, _), c in zip(variants, cfgs, strict=True):
+        m = evaluate(c)
+        m["label"] = label
+        print(summary_line(m), flush=True)
+        results.append(m)
+    ref = np.asarray(results[0]["per_flow"])
+    rows = []
+    for m in results:
+        per = np.asarray(m["per_flow"])
+        ratio = per.mean() / ref.mean()
+        # delta method for a ratio of paired means: var(A - r B) / (n <B>^2)
+        resid = per - ratio * ref
+        ratio_sem = resid.std(ddof=1) / math.sqrt(per.size) / ref.mean() if per.size > 1 else 0.0
+        rows.append(
+            {
+                "label": m["label"],
+                "R_hat_mean": m["R_hat_mean"],
+                "R_hat_sem": m["R_hat_sem"],
+                "R_hat_std": m["R_hat_std"],
+                "ratio_to_first": float(ratio),
+                "ratio_sem": float(ratio_sem),
+                "per_flow": m["per_flow"],
+                "swimmer_substeps_per_s": m["swimmer_substeps_per_s"],
+                "wall_s": m["wall_s"],
+            }
+        )
+    first = results[0]
+    return {
+        "rows": rows,
+        "n_flows": first["n_flows"],
+        "n_swimmers": first["n_swimmers"],
+        "seed": first["seed"],
+        "flow_stats": first["flow_stats"],
+        "config": OmegaConf.to_container(cfg, resolve=True),
+    }
+
+
+def evaluate_check_strategy(cfg: DictConfig) -> None:
+    """Strategy-specific checks (shape factor range etc.) before any compute."""
+    from swimrl.strategies import build_strategy
+
+    build_strategy(cfg.strategy, float(cfg.episode.shape_factor_max))
+
+
+def markdown_table(record: dict) -> str:
+    """The comparison as a Markdown table."""
+    flow = record["config"]["flow"]
+    knob = f"Ku = {flow['kubo']:g}" if flow["name"] == "stochastic" else flow["name"]
+    first = record["rows"][0]["label"]
+    lines = [
+        f"{knob}, {record['n_flows']} flows x {record['n_swimmers']} swimmers, seed "
+        f"{record['seed']}",
+        "",
+        f"| strategy | R_hat (mean +- SEM) | std over flows | ratio to {first} (paired) |",
+        "|---|---|---|---|",
+    ]
+    for r in record["rows"]:
+        lines.append(
+            f"| {r['label']} | {r['R_hat_mean']:.4f} +- {r['R_hat_sem']:.4f} | "
+            f"{r['R_hat_std']:.4f} | {r['ratio_to_first']:.3f} +- {r['ratio_sem']:.3f} |"
+        )
+    return "\n".join(lines) + "\n"
+
+
+def plot_scan(record: dict, path) -> None:
+    """``R_hat`` (mean +- SEM) against the constant shape factor of naive strategies."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    rows = [r for r in record["rows"] if r["label"].startswith("naive(")]
+    if len(rows) < 2:
+        return
+    lam = [float(r["label"][6:-1]) for r in rows]
+    fig, ax = plt.subplots(figsize=(5, 3.5))
+    ax.errorbar(
+        lam,
+        [r["R_hat_mean"] for r in rows],
+        yerr=[r["R_hat_sem"] for r in rows],
+        marker="o",
+        capsize=3,
+        color="k",
+    )
+    flow = record["config"]["flow"]
+    ax.set_xlabel(r"constant shape factor $\Lambda$")
+    ax.set_ylabel(r"$\hat R$")
+    ax.set_title(
+        f"naive strategies, Ku = {flow.get('kubo', float('nan')):g} "
+        f"({record['n_flows']} flows x {record['n_swimmers']})"
+    )
+    fig.tight_layout()
+    fig.savefig(path, dpi=120)
+    plt.close(fig)
+
+
+def _main(cfg: DictConfig) -> dict:
+    out = run_dir()
+    target = out / "comparison.json"
+    if target.exists() and not cfg.overwrite:
+        raise FileExistsError(f"{target} exists; pass overwrite=true to replace it")
+    record = compare(cfg)
+    tmp = target.with_suffix(".json.tmp")
+    tmp.write_text(json.dumps(record, indent=2))
+    tmp.replace(target)
+    table = markdown_table(record)
+    (out / "comparison.md").write_text(table)
+    plot_scan(record, out / "naive_scan.png")
+    print(table)
+    log.info("wrote %s", target)
+    return record
+
+
+@hydra.main(config_path=str(CONF_DIR), config_name="compare", version_base="1.3")
+def main(cfg: DictConfig) -> dict:
+    return _main(cfg)
+
+
+@hydra.main(config_path=str(CONF_DIR), config_name="naive_scan", version_base="1.3")
+def main_naive_scan(cfg: DictConfig) -> dict:
+    return _main(cfg)
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,201 @@
+r"""TorchRL environment: batched swimmers in batched flows.
+
+Batch shape ``(n_flows, n_swimmers)``: swimmer ``(f, s)`` moves in flow realisation ``f``.
+One environment step is one decision interval ``T_u``: the action ``Lambda`` (shape factor,
+bounded to ``[-Lambda_max, Lambda_max]``) is held while the dynamics
+(:mod:`swimrl.swimmer`) is integrated over ``T_u / dt`` Heun steps. Reward (``eq:reward``):
+
+``r_i = |x(t_i) - x_0| - |x(t_{i-1}) - x_0|``,
+
+so the undiscounted return telescopes to ``|x(t_N) - x_0|`` (flow length units). Episodes
+are truncated after ``N = T / T_u`` decisions. Keys:
+
+* ``observation`` – the configured signal subset (``signals.names``), ``(F, S, k)``;
+* ``signals`` – all five signals in :data:`swimrl.signals.SIGNAL_NAMES` order (baselines);
+* ``distance`` – ``|x - x_0|``, ``(F, S, 1)``;
+* ``action`` – ``Lambda``, ``(F, S, 1)``; ``reward``; ``done``/``terminated``/``truncated``.
+
+Partial resets (``_reset`` mask ``(F, S, 1)``) start new swimmers at uniformly random
+positions and orientations; a flow whose swimmers all reset also gets a new realisation.
+Positions are kept as a wrapped coordinate in ``[0, L)`` plus integer image counts, so the
+unbounded displacement ``x - x_0 = (p - p_0) + L (m - m_0)`` keeps float32 resolution of the
+grid cell however far the swimmer goes.
+"""
+
+from __future__ import annotations
+
+import math
+
+import torch
+from tensordict import TensorDict, TensorDictBase
+from torchrl.data import Bounded, Categorical, Composite, Unbounded
+from torchrl.envs import EnvBase
+
+from swimrl.config import EnvParams
+from swimrl.flows.fields import GriddedFlow
+from swimrl.integrator import select_kernel
+from swimrl.signals import compute_signals, signal_indices
+
+
+class SwimmerEnv(EnvBase):
+    """Shape-changing spheroidal swimmers maximising their distance from the start point."""
+
+    def __init__(
+        self,
+        flow: GriddedFlow,
+        n_swimmers: int,
+        params: EnvParams,
+        generator: torch.Generator | None = None,
+        kernel: str = "auto",
+    ):
+        if n_swimmers < 1:
+            raise ValueError(f"n_swimmers={n_swimmers} must be >= 1")
+        batch = torch.Size([flow.n_flows, n_swimmers])
+        super().__init__(device=flow.device, batch_size=batch)
+        self.flow = flow
+        self.params = params
+        self.generator = generator if generator is not None else flow.generator
+        if self.generator is None:
+            self.generator = torch.Generator(device=flow.device)
+        self.flow.generator = self.generator
+        self._obs_idx = signal_indices(params.signals)
+        self._kernel = select_kernel(kernel, flow.device)
+        dtype = flow.dtype
+        # physical units of the flow
+        self.tau_k = flow.tau_k
+        self.swim_speed = params.swim_speed * flow.u_rms
+        self.dt = params.dt * flow.tau_k
+        self.rot_kick_std = math.sqrt(2 * params.rot_diffusion / flow.tau_k * self.dt)
+        self.reference_distance = self.swim_speed * params.duration * flow.tau_k  # v_s T
+        dev = flow.device
+        self._flow_index = torch.arange(flow.n_flows, device=dev).repeat_interleave(n_swimmers)
+        self.pos = torch.zeros(batch + (2,), device=dev, dtype=dtype)
+        self.image = torch.zeros(batch + (2,), device=dev, dtype=torch.int64)
+        self.start_pos = torch.zeros_like(self.pos)
+        self.start_image = torch.zeros_like(self.image)
+        self.theta = torch.zeros(batch, device=dev, dtype=dtype)
+        self.step_count = torch.zeros(batch, device=dev, dtype=torch.int64)
+        lam = params.shape_factor_max
+        self.action_spec = Bounded(low=-lam, high=lam, shape=batch + (1,), device=dev, dtype=dtype)
+        self.observation_spec = Composite(
+            observation=Unbounded(shape=batch + (len(self._obs_idx),), device=dev, dtype=dtype),
+            signals=Unbounded(shape=batch + (5,), device=dev, dtype=dtype),
+            distance=Unbounded(shape=batch + (1,), device=dev, dtype=dtype),
+            shape=batch,
+            device=dev,
+        )
+        self.reward_spec = Unbounded(shape=batch + (1,), device=dev, dtype=dtype)
+        self.done_spec = Composite(
+            done=Categorical(2, shape=batch + (1,), dtype=torch.bool, device=dev),
+            terminated=Categorical(2, shape=batch + (1,), dtype=torch.bool, device=dev),
+            truncated=Categorical(2, shape=batch + (1,), dtype=torch.bool, device=dev),
+            shape=batch,
+            device=dev,
+        )
+
+    # -- state helpers ------------------------------------------------------------------------
+    @property
+    def n_swimmers(self) -> int:
+        return self.batch_size[1]
+
+    def displacement(self) -> torch.Tensor:
+        """``x - x_0 = (p - p_0) + L (m - m_0)``, shape ``(F, S, 2)``."""
+        length = self.flow.grid.length
+        return (self.pos - self.start_pos) + length * (self.image - self.start_image).to(
+            self.pos.dtype
+        )
+
+    def _wrap(self) -> None:
+        """Fold positions back into ``[0, L)`` and count the images crossed."""
+        length = self.flow.grid.length
+        shift = torch.floor(self.pos / length)
+        self.pos.sub_(shift * length)
+        self.image.add_(shift.to(torch.int64))
+
+    def signals(self) -> torch.Tensor:
+        """All five signals at the current state, ``(F, S, 5)``."""
+        q = self.flow.sample(self._flow_index, self.pos.view(-1, 2))
+        return compute_signals(
+            q.view(*self.batch_size, 5), self.theta, self.displacement(), self.tau_k
+        )
+
+    def _observe(self) -> TensorDict:
+        sig = self.signals()
+        truncated = (self.step_count >= self.params.n_decisions).unsqueeze(-1)
+        return TensorDict(
+            {
+                "observation": sig[..., self._obs_idx],
+                "signals": sig,
+                "distance": self.displacement().norm(dim=-1, keepdim=True),
+                "done": truncated.clone(),
+                "terminated": torch.zeros_like(truncated),
+                "truncated": truncated,
+            },
+            batch_size=self.batch_size,
+            device=self.device,
+        )
+
+    # -- EnvBase API ---------------------------------------------------------------------------
+    def _reset(self, tensordict: TensorDictBase | None = None, **kwargs) -> TensorDictBase:
+        mask = None
+        if tensordict is not None and "_reset" in tensordict.keys():  # noqa: SIM118
+            mask = tensordict.get("_reset").reshape(self.batch_size)
+        if mask is None:
+            mask = torch.ones(self.batch_size, dtype=torch.bool, device=self.device)
+        flows = mask.all(dim=1)
+        if flows.any():
+            self.flow.reset(flows)
+        k = int(mask.sum())
+        if k:
+            g, dev, dt = self.generator, self.device, self.pos.dtype
+            new_pos = torch.rand(k, 2, generator=g, device=dev, dtype=dt) * self.flow.grid.length
+            self.pos[mask] = new_pos
+            self.start_pos[mask] = new_pos
+            self.image[mask] = 0
+            self.start_image[mask] = 0
+            self.theta[mask] = torch.rand(k, generator=g, device=dev, dtype=dt) * (2 * math.pi)
+            self.step_count[mask] = 0
+        return self._observe()
+
+    def _step(self, tensordict: TensorDictBase) -> TensorDictBase:
+        lam_max = self.params.shape_factor_max
+        action = tensordict.get("action").reshape(-1).clamp(-lam_max, lam_max)
+        dist_before = self.displacement().norm(dim=-1)
+        self.integrate(action)
+        self.step_count += 1
+        out = self._observe()
+        out.set("reward", (out.get("distance").squeeze(-1) - dist_before).unsqueeze(-1))
+        return out
+
+    def integrate(self, shape_factor: torch.Tensor) -> None:
+        """Advance all swimmers and flows by one decision interval with ``Lambda`` held fixed."""
+        k = self.params.n_substeps
+        path = self.flow.coefficient_path(k, self.dt)
+        theta = self.theta.view(-1)
+        kicks = None
+        if self.rot_kick_std > 0:
+            kicks = self.rot_kick_std * torch.randn(
+                (k,) + theta.shape, generator=self.generator, device=self.device, dtype=theta.dtype
+            )
+        grid = self.flow.grid
+        pos, theta = self._kernel(
+            self.flow.table,
+            path,
+            self._flow_index,
+            self.pos.view(-1, 2),
+            theta,
+            shape_factor,
+            kicks,
+            grid.n,
+            grid.spacing,
+            self.swim_speed,
+            self.dt,
+        )
+        self.pos.copy_(pos.view_as(self.pos))
+        self.theta.copy_(torch.remainder(theta, 2 * math.pi).view_as(self.theta))
+        self._wrap()
+
+    def _set_seed(self, seed: int | None) -> None:
+        if seed is None:
+            seed = int(torch.empty((), dtype=torch.int64).random_().item())
+        self.generator.manual_seed(int(seed))

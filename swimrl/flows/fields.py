@@ -1,0 +1,139 @@
+"""Flows as time-dependent linear combinations of gridded basis fields.
+
+Every flow in swimrl has the form
+
+``q(x, t) = sum_{m=1..M} c_m(t) Q_m(x)``
+
+where ``q = (u_x, u_y, S_xx, S_xy, omega)`` are the five channels the swimmer needs and
+``Q_m`` are node values on a periodic grid. The stochastic flow (paper Sec. II B) has ``M``
+stream-function components with Ornstein-Uhlenbeck ``c_m``; a stored DNS run has two
+snapshots with linear-in-time weights ``(1 - a, a)``. Sampling interpolates the ``M * 5``
+channels at the points (bilinear, :mod:`swimrl.flows.interpolation`) and contracts with
+``c_m(t)``; the domain is periodically extended so swimmers move in the unbounded plane.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import torch
+
+from swimrl.flows.grid import PeriodicGrid
+from swimrl.flows.interpolation import bilinear_periodic
+
+CHANNELS: tuple[str, ...] = ("u_x", "u_y", "S_xx", "S_xy", "omega")
+N_CHANNELS = len(CHANNELS)
+
+
+@dataclass
+class FlowSample:
+    """Flow seen at points: velocity ``u`` (..., 2), strain ``S_xx``, ``S_xy`` and vorticity."""
+
+    u: torch.Tensor
+    s_xx: torch.Tensor
+    s_xy: torch.Tensor
+    omega: torch.Tensor
+
+    @classmethod
+    def from_channels(cls, q: torch.Tensor) -> FlowSample:
+        """Split a ``(..., 5)`` tensor in :data:`CHANNELS` order."""
+        return cls(u=q[..., 0:2], s_xx=q[..., 2], s_xy=q[..., 3], omega=q[..., 4])
+
+
+def gradient_norm2(q: torch.Tensor) -> torch.Tensor:
+    """``A_ij A_ij`` with ``A_ij = d_j u_i`` from channels: ``2 S_xx^2 + 2 S_xy^2 + omega^2/2``.
+
+    (2D incompressible: ``d_x u_x = -d_y u_y = S_xx``, ``d_y u_x = S_xy - omega/2``,
+    ``d_x u_y = S_xy + omega/2``.)
+    """
+    return 2 * q[..., 2] ** 2 + 2 * q[..., 3] ** 2 + 0.5 * q[..., 4] ** 2
+
+
+class GriddedFlow:
+    """Base class: ``n_flows`` independent realisations of ``q(x,t) = sum_m c_m(t) Q_m(x)``.
+
+    Subclasses fill :attr:`basis` (``(F, n, n, M, 5)``, float) and :attr:`coeffs`
+    (``(F, M)``) and implement :meth:`advance` and :meth:`reset`. ``u_rms`` and ``tau_k``
+    are the flow's reference scales (ensemble values) in its own units.
+    """
+
+    u_rms: float = 1.0
+    tau_k: float = 1.0
+
+    def __init__(self, grid: PeriodicGrid, n_flows: int, n_basis: int, device, dtype):
+        self.grid = grid
+        self.n_flows = int(n_flows)
+        self.n_basis = int(n_basis)
+        self.device = torch.device(device)
+        self.dtype = dtype
+        n = grid.n
+        self.basis = torch.zeros(
+            n_flows, n, n, n_basis, N_CHANNELS, device=self.device, dtype=dtype
+        )
+        self.coeffs = torch.zeros(n_flows, n_basis, device=self.device, dtype=dtype)
+        self.time = torch.zeros(n_flows, device=self.device, dtype=torch.float64)
+
+    # -- interface for subclasses -------------------------------------------------------------
+    def advance(self, dt: float) -> None:  # pragma: no cover - abstract
+        """Advance the coefficients (and, where needed, the basis) from ``t`` to ``t + dt``."""
+        raise NotImplementedError
+
+    def reset(self, flows: torch.Tensor | None = None) -> None:  # pragma: no cover - abstract
+        """Draw new realisations where ``flows`` (bool ``(F,)``) is true (all if None)."""
+        raise NotImplementedError
+
+    def coefficient_path(self, n_steps: int, dt: float) -> torch.Tensor:
+        """Coefficients at ``t, t + dt, ..., t + n_steps dt``: ``(n_steps + 1, F, M)``.
+
+        Advances the flow to ``t + n_steps dt`` (as ``n_steps`` calls of :meth:`advance`).
+        """
+        path = [self.coeffs.clone()]
+        for _ in range(n_steps):
+            self.advance(dt)
+            path.append(self.coeffs.clone())
+        return torch.stack(path)
+
+    # -- sampling -----------------------------------------------------------------------------
+    @property
+    def table(self) -> torch.Tensor:
+        """Basis as a ``(F * n * n, M * 5)`` row table for gathers."""
+        return self.basis.view(-1, self.n_basis * N_CHANNELS)
+
+    def sample(
+        self, flow_index: torch.Tensor, pos: torch.Tensor, coeffs: torch.Tensor | None = None
+    ) -> torch.Tensor:
+        """Channels ``q(x, t)``, ``(P, 5)``, at ``pos`` ``(P, 2)`` in flows ``flow_index``.
+
+        ``q = sum_m c_m(t) I[Q_m](x)`` with ``I`` the bilinear periodic interpolant and
+        ``c`` the current coefficients (or ``coeffs``, ``(F, M)``).
+        """
+        c = self.coeffs if coeffs is None else coeffs
+        return sample_basis(self.table, self.grid.n, self.grid.spacing, flow_index, c, pos)
+
+    def grid_fields(self) -> torch.Tensor:
+        """Current node values ``q_j(t) = sum_m c_m(t) Q_m(x_j)``, shape ``(F, n, n, 5)``."""
+        return torch.einsum("fm,fyxmc->fyxc", self.coeffs, self.basis)
+
+    def measured_stats(self) -> dict[str, float]:
+        """Grid averages over all flows: ``u_rms = <u.u>^{1/2}``, ``tau_K = <A_ij A_ij>^{-1/2}``."""
+        q = self.grid_fields().double()
+        u2 = (q[..., 0] ** 2 + q[..., 1] ** 2).mean().item()
+        a2 = gradient_norm2(q).mean().item()
+        return {"u_rms": u2**0.5, "tau_K": a2**-0.5}
+
+
+def sample_basis(
+    table: torch.Tensor,
+    n: int,
+    spacing: float,
+    flow_index: torch.Tensor,
+    coeffs: torch.Tensor,
+    pos: torch.Tensor,
+) -> torch.Tensor:
+    """``q(x) = sum_m c_m I[Q_m](x)`` from a ``(F n n, M 5)`` table; returns ``(P, 5)``."""
+    m = coeffs.shape[-1]
+    rows = bilinear_periodic(table, n, flow_index, pos, spacing)
+    if m == 1:
+        return rows * coeffs[flow_index]
+    rows = rows.view(-1, m, N_CHANNELS)
+    return (coeffs[flow_index].unsqueeze(-1) * rows).sum(1)

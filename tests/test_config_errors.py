@@ -1,0 +1,106 @@
+"""Bad input fails with one clear line naming the key and the allowed range, before compute."""
+
+from __future__ import annotations
+
+import json
+import subprocess
+import sys
+
+import pytest
+from hydra.errors import ConfigCompositionException
+
+from swimrl.evaluate import evaluate, validate_eval_cfg
+
+from .conftest import SMALL
+
+
+@pytest.mark.parametrize(
+    ("override", "key"),
+    [
+        ("flow.kubo=0", "flow.kubo"),
+        ("flow.kubo=-1", "flow.kubo"),
+        ("episode.shape_factor_max=1.0", "episode.shape_factor_max"),
+        ("episode.shape_factor_max=1.5", "episode.shape_factor_max"),
+        ("episode.dt=0.03", "episode.dt"),
+        ("episode.update_interval=300", "episode.update_interval"),
+        ("episode.duration=0.25", "episode.update_interval"),
+        ("flow.n_grid=63", "flow.n_grid"),
+        ("flow.spacing=0", "flow.spacing"),
+        ("swimmer.swim_speed=-1", "swimmer.swim_speed"),
+        ("swimmer.rot_diffusion=-0.1", "swimmer.rot_diffusion"),
+        ("signals.names=[n_r,foo]", "signals.names"),
+        ("signals.names=[]", "signals.names"),
+        ("strategy=naive strategy.shape_factor=0.99", "strategy.shape_factor"),
+        ("strategy=naive strategy.shape_factor=-1.2", "strategy.shape_factor"),
+        ("eval.n_flows=0", "eval.n_flows"),
+        ("device=tpu", "device"),
+        ("dtype=float16", "dtype"),
+        ("kernel=magic", "kernel"),
+        ("threads=0", "threads"),
+    ],
+)
+def test_bad_values_name_the_key(compose_cfg, override, key):
+    cfg = compose_cfg(SMALL + override.split())
+    with pytest.raises(ValueError) as err:
+        evaluate(cfg)
+    msg = str(err.value)
+    assert key in msg and "\n" not in msg
+
+
+def test_validation_precedes_compute(compose_cfg, monkeypatch):
+    """The flow is never built for an invalid config."""
+    import swimrl.builders as builders
+
+    def boom(*a, **k):
+        raise AssertionError("flow built before validation")
+
+    monkeypatch.setattr(builders, "build_flow", boom)
+    with pytest.raises(ValueError, match="episode.dt"):
+        evaluate(compose_cfg(SMALL + ["episode.dt=0.03"]))
+    cfg = compose_cfg(SMALL + ["episode.dt=0.05"])
+    assert validate_eval_cfg(cfg).n_substeps == 2
+
+
+def test_unknown_strategy_is_a_composition_error_listing_choices(compose_cfg):
+    with pytest.raises(ConfigCompositionException, match="strategy"):
+        compose_cfg(SMALL + ["strategy=bogus"])
+
+
+def test_policy_strategy_needs_a_policy(compose_cfg):
+    with pytest.raises(ValueError, match="policy="):
+        evaluate(compose_cfg(SMALL + ["strategy=policy"]))
+
+
+def test_cli_writes_metrics_and_never_overwrites(tmp_path):
+    run = tmp_path / "run"
+    cmd = [
+        sys.executable,
+        "-m",
+        "swimrl.evaluate",
+        *SMALL,
+        "strategy=sto",
+        "flow.kubo=10",
+        "eval.n_flows=3",
+        "eval.n_swimmers=20",
+        f"hydra.run.dir={run}",
+    ]
+    out = subprocess.run(cmd, capture_output=True, text=True, check=True)
+    assert "sto Ku=10: R_hat =" in out.stdout
+    m = json.loads((run / "metrics.json").read_text())
+    for key in (
+        "R_hat_mean",
+        "R_hat_std",
+        "R_hat_sem",
+        "per_flow",
+        "config",
+        "flow_stats",
+        "wall_s",
+        "swimmer_substeps_per_s",
+    ):
+        assert key in m
+    assert len(m["per_flow"]) == 3 and m["config"]["flow"]["kubo"] == 10
+    assert m["R_hat_sem"] == pytest.approx(m["R_hat_std"] / 3**0.5)
+    before = (run / "metrics.json").read_text()
+    again = subprocess.run(cmd, capture_output=True, text=True)
+    assert again.returncode != 0 and "overwrite=true" in again.stderr
+    assert (run / "metrics.json").read_text() == before

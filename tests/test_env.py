@@ -1,0 +1,133 @@
+"""The TorchRL environment: specs, reward, resets, determinism, kernels."""
+
+from __future__ import annotations
+
+import pytest
+import torch
+from torchrl.envs.utils import check_env_specs
+
+from swimrl.builders import build_env
+from swimrl.config import EnvParams
+from swimrl.env import SwimmerEnv
+from swimrl.flows.stochastic import StochasticFlow
+from swimrl.strategies import ShortTimeOptimal, as_actor
+
+from .conftest import SMALL
+
+
+def small_env(
+    n_flows=2, n_swimmers=8, seed=0, kubo=1.0, kernel="eager", dtype=torch.float32, **params
+):
+    gen = torch.Generator().manual_seed(seed)
+    flow = StochasticFlow(n_flows, kubo, n_grid=64, spacing=0.1, dtype=dtype, generator=gen)
+    p = EnvParams(**{"duration": 2.0, **params})
+    return SwimmerEnv(flow, n_swimmers, p, generator=gen, kernel=kernel)
+
+
+def test_check_env_specs():
+    check_env_specs(small_env())
+    check_env_specs(small_env(signals=("n_theta", "S_np")))
+
+
+def test_reward_telescopes_to_the_final_distance():
+    env = small_env(n_swimmers=16)
+    td = env.rollout(env.params.n_decisions, as_actor(ShortTimeOptimal(0.98)))
+    total = td["next", "reward"].sum(dim=-2)  # sum over time
+    final = td["next", "distance"][..., -1, :]
+    assert torch.allclose(total, final, atol=1e-4)
+    assert td["next", "truncated"][..., -1, :].all()
+    assert not td["next", "truncated"][..., :-1, :].any()
+    assert not td["next", "terminated"].any()
+
+
+def test_same_seed_same_episode_different_seed_different():
+    def run(seed):
+        env = small_env(seed=seed)
+        env.set_seed(seed)
+        return env.rollout(5, as_actor(ShortTimeOptimal(0.98)))["next", "observation"]
+
+    assert torch.equal(run(3), run(3))
+    assert not torch.allclose(run(3), run(4))
+
+
+def test_partial_reset_restarts_only_the_masked_swimmers_and_flows():
+    env = small_env(n_flows=2, n_swimmers=4)
+    env.reset()
+    env.rand_step()
+    basis = env.flow.basis.clone()
+    pos = env.pos.clone()
+    mask = torch.zeros(2, 4, 1, dtype=torch.bool)
+    mask[0] = True  # all swimmers of flow 0
+    mask[1, 2] = True  # one swimmer of flow 1
+    from tensordict import TensorDict
+
+    td = env.reset(TensorDict({"_reset": mask}, batch_size=[2, 4]))
+    assert not torch.equal(env.flow.basis[0], basis[0])  # new realisation for flow 0
+    assert torch.equal(env.flow.basis[1], basis[1])  # flow 1 kept
+    assert torch.equal(env.pos[1, [0, 1, 3]], pos[1, [0, 1, 3]])
+    assert not torch.equal(env.pos[1, 2], pos[1, 2])
+    assert td["distance"][mask.squeeze(-1)].abs().max() == 0
+    assert (env.step_count[mask.squeeze(-1)] == 0).all()
+
+
+def test_unbounded_motion_keeps_the_displacement():
+    """In still fluid a swimmer goes straight across many periodic boxes: x - x_0 = v_s t n."""
+    gen = torch.Generator().manual_seed(0)
+    flow = StochasticFlow(1, 1.0, n_grid=16, spacing=0.5, generator=gen)
+    env = SwimmerEnv(flow, 64, EnvParams(duration=2.0, swim_speed=20.0), generator=gen)
+    td = env.reset()
+    flow.basis.zero_()  # still fluid (after the reset, which draws a new realisation)
+    theta0 = env.theta.clone()
+    for _ in range(env.params.n_decisions):
+        td = env.step(td.set("action", torch.zeros(1, 64, 1))).get("next")
+    t = env.params.duration * flow.tau_k
+    expected = env.swim_speed * t * torch.stack((theta0.cos(), theta0.sin()), -1)
+    assert env.reference_distance == pytest.approx(env.swim_speed * t)
+    assert expected.norm(dim=-1).min() > 2 * flow.grid.length  # crossed several boxes
+    assert torch.all(env.pos >= 0) and torch.all(env.pos < flow.grid.length)
+    assert torch.allclose(env.displacement(), expected, atol=1e-4)
+    assert torch.allclose(td["distance"].squeeze(-1), expected.norm(dim=-1), atol=1e-4)
+
+
+@pytest.mark.parametrize("dtype", [torch.float32, torch.float64])
+def test_fused_kernel_matches_eager(dtype):
+    outs = []
+    for kernel in ("eager", "fused"):
+        env = small_env(kernel=kernel, dtype=dtype, rot_diffusion=0.1)
+        env.set_seed(7)
+        env.reset()
+        lam = torch.linspace(-0.98, 0.98, env.batch_size.numel(), dtype=dtype)
+        for _ in range(10):
+            env.integrate(lam)
+        outs.append((env.displacement(), env.theta))
+    tol = 1e-12 if dtype == torch.float64 else 2e-5
+    assert torch.allclose(outs[0][0], outs[1][0], atol=tol)
+    assert torch.allclose(outs[0][1], outs[1][1], atol=tol)
+
+
+def test_rotational_noise_diffuses_the_orientation():
+    """In a still fluid theta performs Brownian motion: <dtheta^2> = 2 D_r t."""
+    gen = torch.Generator().manual_seed(0)
+    flow = StochasticFlow(1, 1.0, n_grid=16, spacing=0.5, dtype=torch.float64, generator=gen)
+    env = SwimmerEnv(flow, 4000, EnvParams(duration=2.0, rot_diffusion=0.5), generator=gen)
+    env.reset()
+    flow.basis.zero_()  # still fluid
+    theta0 = env.theta.clone()
+    lam = torch.zeros(4000, dtype=torch.float64)
+    unwrapped = torch.zeros_like(theta0)
+    for _ in range(10):
+        prev = env.theta.clone()
+        env.integrate(lam)
+        unwrapped += torch.remainder(env.theta - prev + torch.pi, 2 * torch.pi) - torch.pi
+    t = 10 * env.params.update_interval * flow.tau_k
+    d_r = 0.5 / flow.tau_k
+    assert unwrapped.var().item() == pytest.approx(2 * d_r * t, rel=0.1)
+    del theta0
+
+
+def test_build_env_from_config(compose_cfg):
+    cfg = compose_cfg(SMALL + ["signals=nth_snp"])
+    env = build_env(cfg, 2, 3, 0, torch.device("cpu"), torch.float32)
+    td = env.reset()
+    assert td["observation"].shape == (2, 3, 2)
+    assert torch.equal(td["observation"], td["signals"][..., [1, 3]])
