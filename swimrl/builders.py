@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import os
+from pathlib import Path
 
 import torch
 from omegaconf import DictConfig
@@ -28,10 +29,33 @@ def setup_runtime(cfg: DictConfig) -> tuple[torch.device, torch.dtype]:
 
 
 def build_flow(
-    cfg_flow: DictConfig, n_flows: int, device, dtype, generator: torch.Generator
+    cfg_flow: DictConfig,
+    n_flows: int,
+    device,
+    dtype,
+    generator: torch.Generator,
+    params: EnvParams | None = None,
 ) -> GriddedFlow:
-    """The flow backend named by ``flow.name``, with ``n_flows`` realisations."""
+    """The flow backend named by ``flow.name``, with ``n_flows`` realisations.
+
+    Replayed flows need the episode ``params`` (interval and duration in units of tau_K).
+    """
     validate_flow_cfg(cfg_flow)
+    if cfg_flow.name == "dns_replay":
+        from swimrl.flows.dns.store import DNSStore
+        from swimrl.flows.replay import ReplayFlow
+
+        params = params or EnvParams()
+        store = DNSStore(Path(str(cfg_flow.path)))
+        return ReplayFlow(
+            store,
+            n_flows,
+            interval=params.update_interval * store.tau_k,
+            episode_time=params.duration * store.tau_k,
+            device=device,
+            dtype=dtype,
+            generator=generator,
+        )
     if cfg_flow.name == "stochastic":
         return StochasticFlow(
             n_flows,
@@ -52,5 +76,5 @@ def build_env(
     """Environment of ``n_flows x n_swimmers`` swimmers; all randomness from ``seed``."""
     params = EnvParams.from_cfg(cfg)
     gen = torch.Generator(device=device).manual_seed(int(seed))
-    flow = build_flow(cfg.flow, n_flows, device, dtype, gen)
+    flow = build_flow(cfg.flow, n_flows, device, dtype, gen, params)
     return SwimmerEnv(flow, n_swimmers, params, generator=gen, kernel=str(cfg.kernel))

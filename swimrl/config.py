@@ -8,6 +8,7 @@ the flow's own ``tau_K`` and ``u_rms``.
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from pathlib import Path
 
 import torch
 
@@ -15,7 +16,7 @@ from swimrl.signals import SIGNAL_NAMES, signal_indices
 
 SHAPE_FACTOR_LIMIT = 1.0
 STRATEGIES = ("naive", "sto", "minimal", "policy")
-FLOWS = ("stochastic", "dns_replay", "dns")
+FLOWS = ("stochastic", "dns_replay")
 
 
 class ConfigError(ValueError):
@@ -127,3 +128,11 @@ def validate_flow_cfg(flow) -> None:
         n = int(flow.n_grid)
         _check(n >= 4 and n % 2 == 0, "flow.n_grid", flow.n_grid, "even integer >= 4")
         _check(float(flow.spacing) > 0, "flow.spacing", flow.spacing, "> 0 (units ell_f)")
+    if flow.name == "dns_replay":
+        path = Path(str(flow.path))
+        _check(
+            (path / "zarr.json").exists() or (path / ".zgroup").exists(),
+            "flow.path",
+            str(flow.path),
+            "a DNS store made by swimrl-dns (see docs/dns.md)",
+        )

@@ -1,0 +1,96 @@
+"""Replay of stored snapshots: exact at stored times, linear in between, windows sliding."""
+
+from __future__ import annotations
+
+import math
+
+import pytest
+import torch
+
+from swimrl.config import EnvParams
+from swimrl.env import SwimmerEnv
+from swimrl.flows.replay import ReplayFlow
+
+
+class MemorySource:
+    """Snapshots Q_j(x) = (1 + j^2/10) * F(x) + j G(x): non-linear in j, so windows matter."""
+
+    def __init__(self, n=16, n_times=40, dt_store=0.07, length=2 * math.pi):
+        self.n, self.n_times, self.dt_store, self.length = n, n_times, dt_store, length
+        self.u_rms, self.tau_k = 1.3, 0.35
+        x = torch.arange(n, dtype=torch.float64) * length / n
+        yy, xx = torch.meshgrid(x, x, indexing="ij")
+        self.f = torch.stack(
+            [torch.sin(xx), torch.cos(yy), xx * 0 + 0.3, torch.sin(xx + yy), torch.cos(xx - yy)], -1
+        )
+        self.g = torch.stack(
+            [torch.cos(2 * yy), xx * 0 + 1, torch.sin(yy), xx * 0, torch.sin(xx)], -1
+        )
+        self.reads = 0
+
+    def snapshot(self, j: int) -> torch.Tensor:
+        return (1 + j * j / 10) * self.f + j * self.g
+
+    def channels(self, i0: int, i1: int) -> torch.Tensor:
+        assert 0 <= i0 <= i1 <= self.n_times
+        self.reads += i1 - i0
+        return torch.stack([self.snapshot(j) for j in range(i0, i1)]).float()
+
+
+def grid_value(flow, f: int) -> torch.Tensor:
+    return flow.grid_fields()[f].double()
+
+
+@pytest.mark.parametrize("interval", [0.05, 0.07, 0.16])
+def test_replay_is_exact_at_stored_times_and_linear_between(interval):
+    src = MemorySource()
+    gen = torch.Generator().manual_seed(0)
+    flow = ReplayFlow(
+        src, 3, interval=interval, episode_time=2.0, dtype=torch.float64, generator=gen
+    )
+    start = flow.start.clone()
+    dt = interval / 5
+    for _ in range(12):
+        path = flow.coefficient_path(5, dt)
+        assert torch.allclose(path.sum(-1), torch.ones(6, 3, dtype=torch.float64))
+        for f in range(3):
+            s = start[f].item() + flow.time[f].item() / src.dt_store
+            j = math.floor(s + 1e-9)
+            a = s - j
+            expected = (
+                (1 - a) * src.snapshot(j) + a * src.snapshot(j + 1)
+                if a > 1e-9
+                else (src.snapshot(j))
+            )
+            assert torch.allclose(grid_value(flow, f), expected.double(), atol=1e-5)
+
+
+def test_replay_reads_each_snapshot_about_once():
+    src = MemorySource(n_times=200)
+    flow = ReplayFlow(src, 1, interval=0.07, episode_time=5.0, generator=torch.Generator())
+    src.reads = 0
+    for _ in range(50):
+        flow.coefficient_path(7, 0.01)
+    assert src.reads <= 50 + 2  # ~ one new snapshot per interval of one Δ
+
+
+def test_too_short_run_is_a_clear_error():
+    with pytest.raises(ValueError, match="stored run has 40 snapshots"):
+        ReplayFlow(MemorySource(), 1, interval=0.1, episode_time=10.0)
+
+
+def test_env_on_replay_uses_the_runs_units():
+    src = MemorySource(n_times=400)
+    flow = ReplayFlow(
+        src,
+        2,
+        interval=0.1 * src.tau_k,
+        episode_time=2.0 * src.tau_k,
+        generator=torch.Generator().manual_seed(1),
+    )
+    env = SwimmerEnv(flow, 5, EnvParams(duration=2.0), kernel="eager")
+    assert env.swim_speed == pytest.approx(0.707 * src.u_rms)
+    assert env.dt == pytest.approx(0.01 * src.tau_k)
+    td = env.rollout(env.params.n_decisions)
+    assert torch.isfinite(td["next", "distance"]).all()
+    assert td["next", "truncated"][..., -1, :].all()
