@@ -7,9 +7,10 @@ them the flow is linear in time:
 
 which is the :class:`GriddedFlow` form ``sum_m c_m(t) Q_m`` over a sliding window of
 ``M`` consecutive snapshots with hat-function weights
-``c_m(t) = max(0, 1 - |t/Δ - (j_0 + m)|)``. The window is chosen per flow and per decision
-interval so that it covers the whole interval (``M = T_u/Δ + 1`` snapshots when ``T_u`` is a multiple of ``Δ``, else
-``ceil(T_u/Δ) + 2``); only snapshots new to the window are read. Spatially the fields are periodically extended and
+``c_m(t) = max(0, 1 - |t/Δ - (j_0 + m)|)``. The window is chosen per flow and per
+decision interval so that it covers the whole interval (``M = T_u/Δ + 1`` snapshots when
+``T_u`` is a multiple of ``Δ``, else ``ceil(T_u/Δ) + 2``); only snapshots new to the window
+are read. Spatially the fields are periodically extended and
 interpolated bilinearly, as for the stochastic flow. Each realisation (row of the batch)
 starts its episode at a uniformly random stored time index (the swimmers' random start
 positions supply the random place).
