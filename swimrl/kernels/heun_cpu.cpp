@@ -33,13 +33,16 @@ inline Eval<T> rhs(const T* table, int64_t n, T inv_h, int64_t m, const T* c, in
   const T* r10 = table + (base + iy1 * n + ix0) * nc;
   const T* r11 = table + (base + iy1 * n + ix1) * nc;
   const T w00 = (1 - a) * (1 - b), w01 = a * (1 - b), w10 = (1 - a) * b, w11 = a * b;
+  // bilinear blend of the M*5 contiguous channels (vectorisable), then contract with c_j
+  constexpr int64_t kMaxChannels = 64;
+  T blend[kMaxChannels];
+  for (int64_t o = 0; o < nc; ++o) {
+    blend[o] = w00 * r00[o] + w01 * r01[o] + w10 * r10[o] + w11 * r11[o];
+  }
   T q[5] = {0, 0, 0, 0, 0};
   for (int64_t j = 0; j < m; ++j) {
     const T cj = c[j];
-    for (int ch = 0; ch < 5; ++ch) {
-      const int64_t o = j * 5 + ch;
-      q[ch] += cj * (w00 * r00[o] + w01 * r01[o] + w10 * r10[o] + w11 * r11[o]);
-    }
+    for (int ch = 0; ch < 5; ++ch) q[ch] += cj * blend[j * 5 + ch];
   }
   const T cs = std::cos(th), sn = std::sin(th);
   const T c2 = cs * cs - sn * sn, s2 = 2 * sn * cs;
@@ -122,6 +125,7 @@ void integrate_interval_cpu(torch::Tensor table, torch::Tensor coeff_path,
                             torch::Tensor flow_index, torch::Tensor pos, torch::Tensor theta,
                             torch::Tensor lam, c10::optional<torch::Tensor> kicks, int64_t n,
                             double spacing, double swim_speed, double dt) {
+  TORCH_CHECK(coeff_path.size(2) * 5 <= 64, "fused kernel supports at most 12 basis fields");
   TORCH_CHECK(table.is_contiguous() && coeff_path.is_contiguous() && pos.is_contiguous() &&
                   theta.is_contiguous() && lam.is_contiguous() && flow_index.is_contiguous(),
               "fused kernel needs contiguous tensors");
