@@ -12,7 +12,14 @@ from swimrl.signals import compute_signals
 from swimrl.strategies import ShortTimeOptimal
 from swimrl.swimmer import heun_step, swimmer_rhs
 
-torch.set_default_dtype(torch.float64)
+
+@pytest.fixture(autouse=True)
+def _float64():
+    """Analytic comparisons in double precision; restore the default afterwards."""
+    old = torch.get_default_dtype()
+    torch.set_default_dtype(torch.float64)
+    yield
+    torch.set_default_dtype(old)
 
 
 def shear_sampler(gamma: float):

@@ -1,0 +1,140 @@
+"""Parameters of the 2D Navier-Stokes DNS (paper eq. NSE, vorticity form).
+
+``d_t omega + u . grad omega = nu lap omega - alpha (-lap)^{-h} omega + f``
+
+with ``nu`` the viscosity, ``alpha`` the hypo-friction coefficient and ``h = hypo_power``
+(``h = 0`` is the paper's linear friction ``-alpha u``), ``f`` the white-in-time forcing that
+injects energy at the mean rate ``epsilon``, peaked at ``|k| = k_f`` with Gaussian width
+``forcing_width``. See ``docs/dns.md`` for the default values and their derivation.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import asdict, dataclass, fields
+
+import torch
+
+from swimrl.flows.dns.grid import dealias_cutoff
+
+DTYPES: dict[str, torch.dtype] = {"float32": torch.float32, "float64": torch.float64}
+
+
+class DNSParamError(ValueError):
+    """A DNS parameter is out of its allowed range (one-line message naming key and range)."""
+
+
+@dataclass(frozen=True)
+class DNSParams:
+    """Physical and numerical parameters; validated on construction.
+
+    Keys: ``n`` grid points per side, ``length`` box side ``L``, ``nu`` viscosity, ``alpha``
+    hypo-friction coefficient, ``hypo_power`` ``h`` in ``(-lap)^{-h}``, ``epsilon`` mean energy
+    injection rate, ``k_f`` forcing wavenumber, ``forcing_width`` Gaussian width of the forcing
+    spectrum in ``|k|``, ``dt`` time step, ``dtype`` ``"float32"``/``"float64"``, ``device``
+    torch device string, ``cfl_max`` CFL limit of the stepper, ``cfl_every`` steps between CFL
+    checks.
+    """
+
+    n: int = 512
+    length: float = 2 * math.pi
+    nu: float = 1.0e-4
+    alpha: float = 0.5
+    hypo_power: float = 1.0
+    epsilon: float = 1.0
+    k_f: float = 3.0
+    forcing_width: float = 0.5
+    dt: float = 1.0e-3
+    dtype: str = "float32"
+    device: str = "cpu"
+    cfl_max: float = 1.0
+    cfl_every: int = 1
+
+    def __post_init__(self) -> None:
+        def bad(key: str, rng: str) -> DNSParamError:
+            return DNSParamError(f"dns.{key}={getattr(self, key)!r} out of range: must be {rng}")
+
+        def num(key: str) -> float:
+            v = getattr(self, key)
+            if isinstance(v, bool) or not isinstance(v, int | float) or not math.isfinite(v):
+                raise bad(key, "a finite number")
+            return float(v)
+
+        if isinstance(self.n, bool) or not isinstance(self.n, int) or self.n < 8 or self.n % 2:
+            raise bad("n", "an even integer >= 8")
+        if not num("length") > 0:
+            raise bad("length", "> 0")
+        if not num("nu") >= 0:
+            raise bad("nu", ">= 0")
+        if not num("alpha") >= 0:
+            raise bad("alpha", ">= 0")
+        if not 0 <= num("hypo_power") <= 8:
+            raise bad("hypo_power", "in [0, 8]")
+        if not num("epsilon") >= 0:
+            raise bad("epsilon", ">= 0")
+        k_max = 2 * math.pi * dealias_cutoff(self.n) / self.length
+        k_min = 2 * math.pi / self.length
+        if not k_min <= num("k_f") <= k_max:
+            raise bad("k_f", f"in [{k_min:.4g}, {k_max:.4g}] (box wavenumber .. k_max)")
+        if not 0 < num("forcing_width") <= num("k_f"):
+            raise bad("forcing_width", f"in (0, k_f={self.k_f}]")
+        if not num("dt") > 0:
+            raise bad("dt", "> 0")
+        if self.dtype not in DTYPES:
+            raise bad("dtype", f"one of {sorted(DTYPES)}")
+        try:
+            dev = torch.device(self.device)
+        except (RuntimeError, TypeError) as err:
+            raise bad("device", "a torch device string such as 'cpu' or 'cuda:0'") from err
+        if dev.type == "cuda" and not torch.cuda.is_available():
+            raise bad("device", "'cpu' here (CUDA is not available)")
+        if not 0 < num("cfl_max") <= 1.35:
+            raise bad("cfl_max", "in (0, 1.35] (RK4 stability bound 2.83*3/(2 pi))")
+        if isinstance(self.cfl_every, bool) or not isinstance(self.cfl_every, int):
+            raise bad("cfl_every", "an integer >= 1")
+        if self.cfl_every < 1:
+            raise bad("cfl_every", "an integer >= 1")
+
+    @property
+    def torch_dtype(self) -> torch.dtype:
+        """Real torch dtype of the run."""
+        return DTYPES[self.dtype]
+
+    @property
+    def torch_device(self) -> torch.device:
+        """Torch device of the run."""
+        return torch.device(self.device)
+
+    def replace(self, **changes) -> DNSParams:
+        """A validated copy with ``changes`` applied."""
+        return DNSParams(**{**asdict(self), **changes})
+
+    def to_dict(self) -> dict:
+        """Plain ``dict`` of all keys (JSON-serialisable)."""
+        return asdict(self)
+
+    @classmethod
+    def from_mapping(cls, cfg) -> DNSParams:
+        """Build from a mapping (e.g. a Hydra ``DictConfig`` node); unknown keys are an error."""
+        names = {f.name for f in fields(cls)}
+        data = dict(cfg)
+        unknown = sorted(set(data) - names)
+        if unknown:
+            raise DNSParamError(f"dns.{unknown[0]} is not a DNS parameter: allowed {sorted(names)}")
+        return cls(**data)
+
+    # -- physical scales derived from the parameters (Kraichnan 1967 / Boffetta & Ecke 2012) --
+    @property
+    def enstrophy_injection_estimate(self) -> float:
+        """``eta_in ~ epsilon k_f^2`` (thin-shell estimate)."""
+        return self.epsilon * self.k_f**2
+
+    def resolution_estimate(self, eta: float | None = None) -> float:
+        """``k_max l_nu`` with ``l_nu = nu^{1/2} eta^{-1/6}`` the enstrophy-dissipation scale.
+
+        ``eta`` defaults to :attr:`enstrophy_injection_estimate` (an upper bound on the
+        enstrophy flux, hence a lower bound on ``k_max l_nu``).
+        """
+        eta = self.enstrophy_injection_estimate if eta is None else eta
+        k_max = 2 * math.pi * dealias_cutoff(self.n) / self.length
+        return k_max * self.nu**0.5 * eta ** (-1 / 6)

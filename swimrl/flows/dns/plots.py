@@ -1,0 +1,228 @@
+"""Figures of a stored DNS run: spectrum, PDFs, time series and a vorticity snapshot.
+
+``python -m swimrl.flows.dns.plots <store> [--out docs/img] [--snapshots 50]`` writes
+
+* ``dns_spectrum.png``: time-averaged ``E(k)`` with a ``k^-3`` reference line and the fitted
+  slope, and the enstrophy flux ``Pi_Z(k)`` normalised by the viscous enstrophy dissipation;
+* ``dns_pdfs.png``: PDFs of ``omega``, ``S_xx``, ``S_xy`` (each divided by its standard
+  deviation) against the standard Gaussian (paper Fig. 6b);
+* ``dns_timeseries.png``: energy, enstrophy and their rates through spin-up and storing;
+* ``dns_vorticity.png``: the vorticity of the first stored snapshot (paper Fig. 6a);
+
+and prints a JSON summary (slope, moments, ``u_rms``, ``tau_K``, resolution ``k_max l_nu``).
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import math
+from pathlib import Path
+
+import matplotlib
+
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt  # noqa: E402
+import numpy as np  # noqa: E402
+import torch  # noqa: E402
+import zarr  # noqa: E402
+
+from swimrl.flows.dns import diagnostics as dg  # noqa: E402
+from swimrl.flows.dns.grid import SpectralGrid  # noqa: E402
+from swimrl.flows.dns.params import DNSParams  # noqa: E402
+from swimrl.flows.dns.store import DNSStore  # noqa: E402
+
+PDF_CHANNELS = {"omega": 4, "S_xx": 2, "S_xy": 3}
+COLOURS = {"omega": "tab:blue", "S_xx": "tab:green", "S_xy": "tab:red"}
+
+
+def _params(store: DNSStore) -> DNSParams:
+    a = store.attrs
+    keys = ("n", "length", "nu", "alpha", "hypo_power", "epsilon", "k_f", "forcing_width", "dt")
+    return DNSParams(**{k: a[k] for k in keys})
+
+
+def fit_slope(k: np.ndarray, e: np.ndarray, k_lo: float, k_hi: float) -> float:
+    """Least-squares slope of ``log E`` against ``log k`` for ``k_lo <= k <= k_hi``."""
+    sel = (k >= k_lo) & (k <= k_hi) & (e > 0)
+    return float(np.polyfit(np.log(k[sel]), np.log(e[sel]), 1)[0])
+
+
+def spectra(store: DNSStore, idx: np.ndarray) -> dict[str, np.ndarray]:
+    """Averages over snapshots ``idx`` of ``E(k)``, ``Pi_Z(k)``, ``Pi_E(k)`` and ``D_Z``."""
+    p = _params(store)
+    g = SpectralGrid(store.n, store.length, "cpu", torch.float64)
+    e_sum = pz_sum = pe_sum = None
+    dz = 0.0
+    for i in idx:
+        w = store.omega_hat(int(i), int(i) + 1, torch.complex128)
+        k, e = dg.energy_spectrum(g, w)
+        _, pe, pz = dg.spectral_fluxes(g, w)
+        e_sum = e[0] if e_sum is None else e_sum + e[0]
+        pe_sum = pe[0] if pe_sum is None else pe_sum + pe[0]
+        pz_sum = pz[0] if pz_sum is None else pz_sum + pz[0]
+        dz += float(dg.enstrophy_dissipation_rate(g, p, w)[0])
+    m = len(idx)
+    return {"k": k.numpy(), "E": (e_sum / m).numpy(), "Pi_E": (pe_sum / m).numpy(),
+            "Pi_Z": (pz_sum / m).numpy(), "D_Z": dz / m, "k_max": g.k_max}
+
+
+def plot_spectrum(spec: dict, params: DNSParams, out: Path, fit: tuple[float, float]) -> float:
+    """E(k) with a k^-3 line and the fitted slope over ``fit``; Pi_Z(k)/D_Z. Returns slope."""
+    k, e = spec["k"][1:], spec["E"][1:]
+    slope = fit_slope(k, e, *fit)
+    fig, (ax, ax2) = plt.subplots(1, 2, figsize=(10, 4))
+    ax.loglog(k, e, "k-", lw=1.5, label=r"$E(k)$")
+    k_ref = np.array([fit[0], fit[1] * 2])
+    i0 = int(np.argmin(np.abs(k - fit[0])))
+    ax.loglog(k_ref, 2 * e[i0] * (k_ref / k[i0]) ** -3.0, "r--", label=r"$k^{-3}$")
+    sel = (k >= fit[0]) & (k <= fit[1])
+    c = np.exp(np.mean(np.log(e[sel]) - slope * np.log(k[sel])))
+    ax.loglog(k[sel], 0.5 * c * k[sel] ** slope, "b:", label=f"fit slope {slope:.2f}")
+    ax.axvline(params.k_f, color="grey", lw=0.8)
+    ax.axvline(spec["k_max"], color="grey", lw=0.8, ls="--")
+    ax.text(params.k_f * 1.05, e.max() * 0.3, r"$k_f$", color="grey")
+    ax.text(spec["k_max"] * 0.6, e.max() * 0.3, r"$k_{\max}$", color="grey")
+    ax.set_xlabel(r"$k$")
+    ax.set_ylabel(r"$E(k)$")
+    ax.set_ylim(max(e.min(), e.max() * 1e-14), e.max() * 3)
+    ax.legend(frameon=False)
+    ax.set_title("energy spectrum")
+    ax2.semilogx(spec["k"][1:], spec["Pi_Z"][1:] / spec["D_Z"], "k-", label=r"$\Pi_Z/\eta_\nu$")
+    ax2.semilogx(spec["k"][1:], spec["Pi_E"][1:] / params.epsilon, "g-",
+                 label=r"$\Pi_E/\epsilon$")
+    ax2.axhline(0, color="grey", lw=0.5)
+    ax2.axhline(1, color="grey", lw=0.5, ls="--")
+    ax2.axvline(params.k_f, color="grey", lw=0.8)
+    ax2.set_xlabel(r"$k$")
+    ax2.set_title(r"spectral fluxes ($\eta_\nu = 2\nu\langle P\rangle$)")
+    ax2.legend(frameon=False)
+    fig.tight_layout()
+    fig.savefig(out, dpi=130)
+    plt.close(fig)
+    return slope
+
+
+def gradient_samples(store: DNSStore, idx: np.ndarray, chunk: int = 8) -> dict[str, np.ndarray]:
+    """Node values of ``omega``, ``S_xx``, ``S_xy`` over snapshots ``idx`` (float32, flat)."""
+    parts: dict[str, list[np.ndarray]] = {k: [] for k in PDF_CHANNELS}
+    for j in range(0, len(idx), chunk):
+        for i in idx[j:j + chunk]:
+            q = store.channels(int(i), int(i) + 1)[0]
+            for name, c in PDF_CHANNELS.items():
+                parts[name].append(q[..., c].reshape(-1).numpy())
+    return {k: np.concatenate(v) for k, v in parts.items()}
+
+
+def plot_pdfs(samples: dict[str, np.ndarray], out: Path) -> dict[str, dict[str, float]]:
+    """Semi-log PDFs of ``x / std(x)`` for each channel and the Gaussian (paper Fig. 6b)."""
+    fig, ax = plt.subplots(figsize=(5.5, 4))
+    stats = {}
+    for name, x in samples.items():
+        t = torch.from_numpy(x)
+        z, pdf, _ = dg.standardized_pdf(t, bins=121, half_width=12.0)
+        stats[name] = dg.moments(t)
+        keep = pdf > 0
+        label = {"omega": r"$\omega$", "S_xx": r"$S_{xx}$", "S_xy": r"$S_{xy}$"}[name]
+        ax.semilogy(z[keep], pdf[keep], color=COLOURS[name],
+                    label=f"{label} (F={stats[name]['flatness']:.1f})")
+    zz = torch.linspace(-6, 6, 241, dtype=torch.float64)
+    ax.semilogy(zz, dg.gaussian_pdf(zz), "k--", label="Gaussian")
+    ax.set_xlabel(r"$X/\sigma_X$")
+    ax.set_ylabel("PDF")
+    ax.set_ylim(1e-7, 1)
+    ax.legend(frameon=False, fontsize=9)
+    fig.tight_layout()
+    fig.savefig(out, dpi=130)
+    plt.close(fig)
+    return stats
+
+
+def plot_timeseries(path: Path, store: DNSStore, out: Path) -> None:
+    """Energy/enstrophy and their rates from the ``diagnostics`` group."""
+    d = zarr.open_group(str(path), mode="r")["diagnostics"]
+    n = int(store.attrs.get("n_diag", d["t"].shape[0]))
+    t = np.asarray(d["t"][:n])
+    fig, axs = plt.subplots(1, 2, figsize=(10, 3.6))
+    axs[0].plot(t, np.asarray(d["energy"][:n]), label=r"$E$")
+    axs[0].plot(t, np.asarray(d["enstrophy"][:n]) / 10, label=r"$Z/10$")
+    axs[1].plot(t, np.asarray(d["energy_friction"][:n]), label=r"$F_E$ (hypo-friction)")
+    axs[1].plot(t, np.asarray(d["energy_dissipation"][:n]), label=r"$D_E$ (viscous)")
+    axs[1].plot(t, np.asarray(d["enstrophy_dissipation"][:n]) / 10, label=r"$D_Z/10$")
+    axs[1].plot(t, np.asarray(d["enstrophy_friction"][:n]) / 10, label=r"$F_Z/10$")
+    eps = float(store.attrs["epsilon"])
+    axs[1].axhline(eps, color="k", ls="--", lw=0.8, label=r"$\epsilon$")
+    t0 = store.attrs.get("t_first")
+    for ax in axs:
+        if t0 is not None:
+            ax.axvline(float(t0), color="grey", ls=":", lw=1)
+        ax.set_xlabel(r"$t$")
+        ax.legend(frameon=False, fontsize=8)
+    axs[0].set_title("energy and enstrophy (dotted: start of storing)")
+    axs[1].set_title("dissipation rates")
+    fig.tight_layout()
+    fig.savefig(out, dpi=130)
+    plt.close(fig)
+
+
+def plot_vorticity(store: DNSStore, out: Path, index: int = 0) -> None:
+    """Image of ``omega / std(omega)`` at snapshot ``index`` (paper Fig. 6a)."""
+    w = store.channels(index, index + 1)[0, ..., 4].numpy()
+    s = float(w.std())
+    fig, ax = plt.subplots(figsize=(5, 4.4))
+    im = ax.imshow(w / s, origin="lower", cmap="RdBu_r", vmin=-3, vmax=3,
+                   extent=(0, store.length, 0, store.length))
+    fig.colorbar(im, ax=ax, label=r"$\omega/\omega_{\rm rms}$", shrink=0.85)
+    ax.set_xlabel(r"$x$")
+    ax.set_ylabel(r"$y$")
+    ax.set_title(f"vorticity, t = {float(store.times[index]):.2f}")
+    fig.tight_layout()
+    fig.savefig(out, dpi=130)
+    plt.close(fig)
+
+
+def make_plots(path: str | Path, out_dir: str | Path = "docs/img", n_snapshots: int = 50,
+               fit: tuple[float, float] = (6.0, 40.0)) -> dict:
+    """All figures for the store at ``path`` into ``out_dir``; returns the summary dict."""
+    path, out_dir = Path(path), Path(out_dir)
+    out_dir.mkdir(parents=True, exist_ok=True)
+    store = DNSStore(path)
+    if store.n_times == 0:
+        raise ValueError(f"{path} holds no snapshots yet")
+    params = _params(store)
+    idx = np.unique(np.linspace(0, store.n_times - 1, min(n_snapshots, store.n_times)).round()
+                    .astype(int))
+    spec = spectra(store, idx)
+    slope = plot_spectrum(spec, params, out_dir / "dns_spectrum.png", fit)
+    stats = plot_pdfs(gradient_samples(store, idx), out_dir / "dns_pdfs.png")
+    plot_timeseries(path, store, out_dir / "dns_timeseries.png")
+    plot_vorticity(store, out_dir / "dns_vorticity.png")
+    eta = spec["D_Z"]
+    size = sum(f.stat().st_size for f in path.rglob("*") if f.is_file())
+    return {
+        "store": str(path), "n": store.n, "n_times": store.n_times, "dt_store": store.dt_store,
+        "u_rms": store.u_rms, "tau_k": store.tau_k, "dt_store_over_tau_k":
+            store.dt_store / store.tau_k, "spectrum_slope": slope, "slope_fit_range": list(fit),
+        "enstrophy_dissipation": eta, "kmax_l_nu": spec["k_max"] * math.sqrt(params.nu)
+            * eta ** (-1 / 6), "moments": stats, "snapshots_used": len(idx),
+        "store_bytes": size,
+    }
+
+
+def main(argv: list[str] | None = None) -> dict:
+    """``python -m swimrl.flows.dns.plots <store> [--out DIR] [--snapshots M]``."""
+    ap = argparse.ArgumentParser(description="Figures of a stored swimrl DNS run")
+    ap.add_argument("store")
+    ap.add_argument("--out", default="docs/img")
+    ap.add_argument("--snapshots", type=int, default=50, help="snapshots averaged (evenly spaced)")
+    ap.add_argument("--fit", type=float, nargs=2, default=(6.0, 40.0),
+                    help="k range of the spectral slope fit")
+    args = ap.parse_args(argv)
+    torch.set_num_threads(1)
+    summary = make_plots(args.store, args.out, args.snapshots, tuple(args.fit))
+    print(json.dumps(summary, indent=1))
+    return summary
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,156 @@
+r"""Small builders of the PPO pipeline, in the style of TorchRL's ``sota-implementations/ppo``.
+
+``make_env`` -> ``make_actor``/``make_critic`` -> ``make_collector`` -> ``make_loss``
+(``ClipPPOLoss`` + ``GAE``) -> ``make_optimizers``/``make_schedulers`` -> ``make_logger``.
+
+Reward scaling (``train.reward_scale``): the step reward ``r_i`` (paper ``eq:reward``) is a
+radial displacement, at most ``v_s T_u ~ 0.035`` flow units per decision. The training env
+multiplies it by ``c`` (TorchRL ``RewardScaling``); ``auto`` takes ``c = (1 - gamma) / (v_s
+T_u)``, so the discounted return ``V = sum_k gamma^k c r_{i+k}`` is a gamma-weighted average
+of the radial speed in units of ``v_s``: value targets are O(1) whatever ``v_s``, ``T_u`` and
+``gamma``. The scale changes neither the optimal policy nor the (per-minibatch normalised)
+advantages; it only conditions the critic regression. ``distance`` and ``R_hat`` are never
+scaled.
+"""
+
+from __future__ import annotations
+
+import torch
+from omegaconf import DictConfig
+from torch.optim.lr_scheduler import LambdaLR
+from torchrl.collectors import Collector
+from torchrl.envs import EnvBase, RewardScaling, TransformedEnv
+from torchrl.objectives import ClipPPOLoss
+from torchrl.objectives.value import GAE
+from torchrl.record.loggers.tensorboard import TensorboardLogger
+
+from swimrl.builders import build_env
+from swimrl.env import SwimmerEnv
+from swimrl.rl.models import make_actor as _make_actor
+from swimrl.rl.models import make_critic as _make_critic
+from swimrl.rl.plan import TrainPlan
+
+
+def auto_reward_scale(env: SwimmerEnv, gamma: float) -> float:
+    """``(1 - gamma) / (v_s T_u)`` in the flow's units (``gamma = 1``: ``1 / (v_s T)``)."""
+    per_step = env.swim_speed * env.params.update_interval * env.tau_k
+    if per_step <= 0:
+        return 1.0
+    if gamma >= 1.0:
+        return 1.0 / (per_step * env.params.n_decisions)
+    return (1.0 - gamma) / per_step
+
+
+def make_env(cfg: DictConfig, plan: TrainPlan, device, dtype) -> TransformedEnv:
+    """Training env: ``n_flows x n_swimmers`` swimmers seeded with the training stream, with
+    the reward multiplied by the reward scale."""
+    base = build_env(cfg, plan.n_flows, plan.n_swimmers, plan.train_seed, device, dtype)
+    scale = plan.reward_scale
+    if scale is None:
+        scale = auto_reward_scale(base, float(cfg.loss.gamma))
+    return TransformedEnv(base, RewardScaling(loc=0.0, scale=float(scale)))
+
+
+def base_env(env: EnvBase) -> SwimmerEnv:
+    """The :class:`SwimmerEnv` under any transforms."""
+    return env.base_env if isinstance(env, TransformedEnv) else env
+
+
+def reward_scale_of(env: TransformedEnv) -> float:
+    """The reward multiplier applied by :func:`make_env`."""
+    return float(env.transform.scale)
+
+
+def make_actor(cfg: DictConfig, params, device, dtype):
+    """Actor for ``len(signals.names)`` inputs (see :func:`swimrl.rl.models.make_actor`)."""
+    return _make_actor(
+        len(params.signals),
+        params.shape_factor_max,
+        hidden=[int(h) for h in cfg.model.hidden],
+        activation=str(cfg.model.activation),
+        init_std=float(cfg.model.init_std),
+        device=device,
+        dtype=dtype,
+    )
+
+
+def make_critic(cfg: DictConfig, params, device, dtype):
+    """Critic ``V(observation)``."""
+    return _make_critic(
+        len(params.signals),
+        hidden=[int(h) for h in cfg.model.hidden],
+        activation=str(cfg.model.activation),
+        device=device,
+        dtype=dtype,
+    )
+
+
+def make_collector(env: EnvBase, actor, plan: TrainPlan, total_frames: int, device) -> Collector:
+    """TorchRL ``Collector`` over the batched env; output batches ``(F, S, L)`` (time last).
+
+    The env truncates episodes itself after ``N`` decisions; the collector resets the done
+    swimmers (partial ``_reset``), so rollouts run across episode boundaries.
+    """
+    return Collector(
+        env,
+        actor,
+        frames_per_batch=plan.frames_per_batch,
+        total_frames=total_frames,
+        device=device,
+        storing_device=device,
+        auto_register_policy_transforms=False,
+        trust_policy=True,
+    )
+
+
+def make_loss(cfg: DictConfig, actor, critic) -> tuple[ClipPPOLoss, GAE]:
+    r"""``ClipPPOLoss`` (paper ``J(w)``, clip ``epsilon``, entropy bonus) and ``GAE``
+    (``A_i = sum_k (gamma lambda)^k delta_{i+k}``, ``delta_i = r_i + gamma V(s_{i+1}) -
+    V(s_i)``, bootstrapped at truncation since ``terminated`` is never set)."""
+    c = cfg.loss
+    gae = GAE(
+        gamma=float(c.gamma),
+        lmbda=float(c.gae_lambda),
+        value_network=critic,
+        average_gae=False,
+    )
+    loss = ClipPPOLoss(
+        actor,
+        critic,
+        clip_epsilon=float(c.clip_epsilon),
+        entropy_coeff=float(c.entropy_coeff),
+        critic_coeff=float(c.critic_coeff),
+        loss_critic_type=str(c.loss_critic_type),
+        normalize_advantage=bool(c.normalize_advantage),
+    )
+    return loss, gae
+
+
+def make_optimizers(cfg: DictConfig, actor, critic) -> tuple[torch.optim.Adam, torch.optim.Adam]:
+    """Separate Adam optimisers (paper: ``4e-4`` actor, ``8e-5`` critic)."""
+    eps = float(cfg.optim.eps)
+    return (
+        torch.optim.Adam(actor.parameters(), lr=float(cfg.optim.lr_actor), eps=eps),
+        torch.optim.Adam(critic.parameters(), lr=float(cfg.optim.lr_critic), eps=eps),
+    )
+
+
+def make_schedulers(cfg: DictConfig, optimizers, n_updates: int) -> list[LambdaLR]:
+    """Learning rate ``lr_0 (1 - u / n_updates)`` at update ``u`` (``optim.anneal=linear``,
+    reaching ``lr_0 / n_updates`` at the last update) or constant (``none``); stepped once
+    per update."""
+    if cfg.optim.anneal == "linear":
+
+        def factor(u: int) -> float:
+            return max(0.0, 1.0 - u / n_updates)
+    else:
+
+        def factor(u: int) -> float:
+            return 1.0
+
+    return [LambdaLR(opt, factor) for opt in optimizers]
+
+
+def make_logger(run_dir) -> TensorboardLogger:
+    """TensorBoard logger writing under ``<run dir>/tb/ppo``."""
+    return TensorboardLogger(exp_name="ppo", log_dir=str(run_dir / "tb"))

@@ -1,0 +1,178 @@
+r"""A training run in a directory: fresh start, resume, final evaluation, ``metrics.json``.
+
+Rules for the run directory (checked before any compute):
+
+* ``metrics.json`` exists (the run finished): error unless ``overwrite=true``, which deletes
+  the run's outputs (``checkpoints/``, ``policy.pt``, ``metrics.json``, ``tb/``) and trains
+  from scratch;
+* ``checkpoints/last.pt`` exists: error unless ``resume=true`` (continue) or
+  ``overwrite=true`` (start again). ``resume=true`` without a checkpoint starts fresh, so a
+  sweep can always be (re)launched with ``resume=true``;
+* a resumed run must have the same config as the checkpoint, except for the runtime keys
+  in :data:`RESUME_FREE_KEYS` and the ``eval.*`` / periodic evaluation sizes.
+"""
+
+from __future__ import annotations
+
+import json
+import logging
+import shutil
+from pathlib import Path
+
+from omegaconf import DictConfig, OmegaConf
+
+from swimrl.builders import setup_runtime
+from swimrl.config import ConfigError
+from swimrl.evaluate import summary_line, write_metrics
+from swimrl.rl.checkpoint import checkpoint_path, load_file
+from swimrl.rl.plan import validate_train_cfg
+from swimrl.rl.trainer import PPOTrainer
+
+log = logging.getLogger(__name__)
+
+#: Keys that may differ between a checkpoint and the config resuming it.
+RESUME_FREE_KEYS = {
+    "resume",
+    "overwrite",
+    "threads",
+    "device",
+    "kernel",
+    "policy",
+    "train.progress",
+    "train.stop_after_updates",
+    "train.checkpoint_every",
+    "train.checkpoint_seconds",
+    "train.eval_every",
+    "train.eval_flows",
+    "train.eval_swimmers",
+}
+RESUME_FREE_PREFIXES = ("eval.", "hydra.")
+
+
+def _flatten(d: dict, prefix: str = "") -> dict:
+    out = {}
+    for k, v in d.items():
+        key = f"{prefix}{k}"
+        if isinstance(v, dict):
+            out.update(_flatten(v, key + "."))
+        else:
+            out[key] = v
+    return out
+
+
+def config_differences(old: dict, new: dict) -> list[str]:
+    """``key: old -> new`` for the keys that matter to the training trajectory."""
+    a, b = _flatten(old), _flatten(new)
+    diffs = []
+    for key in sorted(set(a) | set(b)):
+        if key in RESUME_FREE_KEYS or key.startswith(RESUME_FREE_PREFIXES):
+            continue
+        if a.get(key, "<missing>") != b.get(key, "<missing>"):
+            diffs.append(f"{key}: {a.get(key, '<missing>')!r} -> {b.get(key, '<missing>')!r}")
+    return diffs
+
+
+def clean_run_dir(out: Path) -> None:
+    """Delete the outputs of a previous run in ``out`` (``overwrite=true``)."""
+    for name in ("checkpoints", "tb"):
+        if (out / name).is_dir():
+            shutil.rmtree(out / name)
+    for name in ("policy.pt", "metrics.json"):
+        (out / name).unlink(missing_ok=True)
+
+
+def prepare_run_dir(cfg: DictConfig, out: Path) -> bool:
+    """Apply the run-directory rules; returns True when a checkpoint is to be resumed."""
+    metrics, ckpt = out / "metrics.json", checkpoint_path(out)
+    if metrics.exists() and not cfg.overwrite:
+        raise FileExistsError(
+            f"{metrics} exists: this run is finished; pass overwrite=true to train it again "
+            "from scratch"
+        )
+    if ckpt.exists() and not cfg.overwrite and not cfg.resume:
+        raise FileExistsError(
+            f"{ckpt} exists: pass resume=true to continue this run, or overwrite=true to "
+            "start it again"
+        )
+    if cfg.overwrite:
+        clean_run_dir(out)
+        return False
+    return ckpt.exists()
+
+
+def train(cfg: DictConfig, out: Path) -> dict | None:
+    """Train (or resume) in ``out``; returns the final metrics, or None if stopped early."""
+    out = Path(out)
+    plan = validate_train_cfg(cfg)
+    if not isinstance(cfg.resume, bool) or not isinstance(cfg.overwrite, bool):
+        raise ConfigError(
+            f"resume={cfg.resume!r}, overwrite={cfg.overwrite!r} are invalid: allowed true/false"
+        )
+    device, dtype = setup_runtime(cfg)
+    resuming = prepare_run_dir(cfg, out)
+    if resuming:
+        old = load_file(checkpoint_path(out))["config"]
+        diffs = config_differences(old, OmegaConf.to_container(cfg, resolve=True))
+        if diffs:
+            raise ConfigError(
+                f"resume=true with a config that differs from {checkpoint_path(out)}: "
+                + "; ".join(diffs)
+            )
+    out.mkdir(parents=True, exist_ok=True)
+    trainer = PPOTrainer(cfg, plan, out, device, dtype)
+    if resuming:
+        trainer.restore(checkpoint_path(out))
+        log.info(
+            "resumed %s at update %d/%d (%d frames)",
+            out,
+            trainer.counters["updates"],
+            plan.n_updates,
+            trainer.counters["frames"],
+        )
+    log.info(
+        "PPO: %d updates x %d frames (%d flows x %d swimmers x %d decisions), %d epochs x %d "
+        "minibatches of %d; reward scale %.4g; %.1f episodes of %d swimmers",
+        plan.n_updates,
+        plan.frames_per_batch,
+        plan.n_flows,
+        plan.n_swimmers,
+        plan.rollout_steps,
+        plan.epochs,
+        plan.minibatches_per_epoch,
+        plan.minibatch_size,
+        trainer.reward_scale,
+        plan.total_frames / plan.frames_per_episode,
+        plan.n_swimmers,
+    )
+    try:
+        stop = cfg.train.stop_after_updates
+        finished = trainer.train(None if stop is None else int(stop))
+        if not finished:
+            log.info(
+                "stopped after update %d/%d; continue with resume=true",
+                trainer.counters["updates"],
+                plan.n_updates,
+            )
+            return None
+        trainer.save_policy()
+        metrics = trainer.evaluate(cfg)
+    finally:
+        trainer.close()
+    metrics["policy"] = str(out)
+    metrics["training"] = {
+        **trainer.counters,
+        "episodes": trainer.episodes,
+        "n_updates": plan.n_updates,
+        "frames_per_s": trainer.counters["frames"] / max(trainer.counters["wall_s"], 1e-9),
+        "reward_scale": trainer.reward_scale,
+        "eval_seed": plan.eval_seed,
+        "train_seed": plan.train_seed,
+    }
+    write_metrics(metrics, out, overwrite=bool(cfg.overwrite))
+    print(summary_line(metrics), flush=True)
+    return metrics
+
+
+def read_metrics(out: Path) -> dict:
+    """The ``metrics.json`` of a finished run."""
+    return json.loads((Path(out) / "metrics.json").read_text())

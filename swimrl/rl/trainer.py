@@ -1,0 +1,295 @@
+r"""The PPO training loop: collect -> GAE -> epochs of clipped-PPO minibatch steps -> log.
+
+One *update* ``u``:
+
+1. the collector returns a batch ``(F, S, L)`` of ``L`` decisions of every swimmer, sampled
+   from the stochastic policy (``ExplorationType.RANDOM``);
+2. ``GAE`` (with the critic before the update) writes ``advantage`` and ``value_target``;
+3. ``epochs`` passes over a fresh random permutation of the flattened batch, each of
+   ``minibatches_per_epoch`` minibatches: loss ``= loss_objective + loss_entropy +
+   loss_critic`` (``ClipPPOLoss``, advantages normalised per minibatch), one backward, the
+   gradient norm of actor and critic clipped separately, one Adam step each;
+4. both learning rates step down linearly (``make_schedulers``).
+
+Periodic deterministic evaluations (``Lambda = Lambda_max tanh(mu)``) on held-out flows use
+:func:`swimrl.evaluate.evaluate` (``seed + EVAL_SEED_OFFSET``, the same flows every time,
+so successive points share their randomness); update 0 is the initial policy.
+
+Resume: the state after an update is checkpointed atomically; ``resume=true`` reloads it
+(networks, optimisers, schedulers, RNGs, counters) and continues with update ``u + 1``.
+Collector and environment are *not* checkpointed mid-episode: the resumed run starts fresh
+episodes (new flow realisations drawn from the restored env generator), so the frames
+collected after the last checkpoint and the unfinished episodes of the killed process are
+discarded, never counted twice. Finished updates are never redone.
+"""
+
+from __future__ import annotations
+
+import copy
+import logging
+import math
+import time
+from pathlib import Path
+
+import torch
+from omegaconf import DictConfig, OmegaConf, open_dict
+from tensordict import TensorDict
+from tqdm.auto import tqdm
+
+from swimrl.evaluate import evaluate
+from swimrl.rl import builders as rlb
+from swimrl.rl.checkpoint import (
+    capture_rng,
+    checkpoint_path,
+    load_file,
+    policy_meta,
+    policy_path,
+    restore_rng,
+    save_checkpoint,
+    save_policy,
+)
+from swimrl.rl.models import deterministic_actor, log_std
+from swimrl.rl.plan import TrainPlan
+
+log = logging.getLogger(__name__)
+
+#: Loss outputs averaged over the minibatches of an update and logged under ``train/``.
+LOSS_LOG_KEYS = (
+    "loss_objective",
+    "loss_critic",
+    "loss_entropy",
+    "entropy",
+    "kl_approx",
+    "clip_fraction",
+    "ESS",
+    "explained_variance",
+)
+
+
+class PPOTrainer:
+    """Owns env, networks, loss, optimisers and counters of one training run."""
+
+    def __init__(self, cfg: DictConfig, plan: TrainPlan, run_dir: Path, device, dtype):
+        self.cfg, self.plan, self.run_dir = cfg, plan, Path(run_dir)
+        self.device, self.dtype = device, dtype
+        params = plan.params
+        torch.manual_seed(int(cfg.seed))  # network init, action sampling, minibatch order
+        self.env = rlb.make_env(cfg, plan, device, dtype)
+        self.swimmer_env = rlb.base_env(self.env)
+        self.reward_scale = rlb.reward_scale_of(self.env)
+        self.actor = rlb.make_actor(cfg, params, device, dtype)
+        self.critic = rlb.make_critic(cfg, params, device, dtype)
+        self.policy = deterministic_actor(self.actor, params.shape_factor_max)
+        self.loss, self.gae = rlb.make_loss(cfg, self.actor, self.critic)
+        self.optimizers = rlb.make_optimizers(cfg, self.actor, self.critic)
+        self.schedulers = rlb.make_schedulers(cfg, self.optimizers, plan.n_updates)
+        self.counters = {"frames": 0, "updates": 0, "wall_s": 0.0}
+        self.meta = policy_meta(cfg, params)
+        self.config = OmegaConf.to_container(cfg, resolve=True)
+        self.logger = None
+        self.last_eval: dict | None = None
+        self.last_train_r_hat: float | None = None
+
+    # -- state --------------------------------------------------------------------------------
+    @property
+    def finished_training(self) -> bool:
+        return self.counters["updates"] >= self.plan.n_updates
+
+    @property
+    def episodes(self) -> float:
+        """Paper episodes so far: ``frames / (n_swimmers N)``."""
+        return self.counters["frames"] / self.plan.frames_per_episode
+
+    def save_checkpoint(self) -> Path:
+        path = save_checkpoint(
+            checkpoint_path(self.run_dir),
+            actor=self.actor,
+            critic=self.critic,
+            optimizers=self.optimizers,
+            schedulers=self.schedulers,
+            rng=capture_rng(self.swimmer_env.generator),
+            counters=self.counters,
+            config=self.config,
+            meta={**self.meta, "reward_scale": self.reward_scale},
+        )
+        if self.logger is not None:
+            self.logger.experiment.flush()
+        return path
+
+    def restore(self, path: Path) -> dict:
+        """Load the training state written by :meth:`save_checkpoint`."""
+        ck = load_file(path, map_location=self.device)
+        self.actor.load_state_dict(ck["actor"])
+        self.critic.load_state_dict(ck["critic"])
+        for opt, st in zip(self.optimizers, ck["optimizers"], strict=True):
+            opt.load_state_dict(st)
+        for sch, st in zip(self.schedulers, ck["schedulers"], strict=True):
+            sch.load_state_dict(st)
+        restore_rng(ck["rng"], self.swimmer_env.generator)
+        self.counters = dict(ck["counters"])
+        return ck
+
+    def save_policy(self) -> Path:
+        return save_policy(
+            policy_path(self.run_dir),
+            actor=self.actor,
+            counters=self.counters,
+            config=self.config,
+            meta=self.meta,
+        )
+
+    # -- evaluation ---------------------------------------------------------------------------
+    def eval_cfg(self, n_flows: int, n_swimmers: int) -> DictConfig:
+        """The run config with an evaluation of ``n_flows x n_swimmers`` (no progress bar)."""
+        c = copy.deepcopy(self.cfg)
+        with open_dict(c):
+            c.eval.n_flows = int(n_flows)
+            c.eval.n_swimmers = int(n_swimmers)
+            c.eval.flows_per_batch = min(int(c.eval.flows_per_batch), int(n_flows))
+            c.eval.progress = False
+        return c
+
+    def evaluate(self, cfg_eval: DictConfig | None = None) -> dict:
+        """Deterministic policy on held-out flows (``seed + EVAL_SEED_OFFSET``)."""
+        if cfg_eval is None:
+            cfg_eval = self.eval_cfg(self.cfg.train.eval_flows, self.cfg.train.eval_swimmers)
+        return evaluate(cfg_eval, actor=self.policy, seed=self.plan.eval_seed)
+
+    def _periodic_eval(self) -> None:
+        t0 = time.perf_counter()
+        m = self.evaluate()
+        self.last_eval = m
+        step = self.counters["frames"]
+        self.logger.log_scalar("eval/R_hat", m["R_hat_mean"], step)
+        self.logger.log_scalar("eval/R_hat_sem", m["R_hat_sem"], step)
+        self.logger.log_scalar("eval/time_s", time.perf_counter() - t0, step)
+        self.logger.log_scalar("eval/R_hat_vs_episodes", m["R_hat_mean"], round(self.episodes))
+
+    # -- one update ---------------------------------------------------------------------------
+    def update(self, data: TensorDict) -> dict[str, torch.Tensor]:
+        """GAE + ``epochs x minibatches`` clipped-PPO steps on one batch; mean loss terms."""
+        plan = self.plan
+        with torch.no_grad():
+            data = self.gae(data)
+        flat = data.select(*self._loss_keys(data), strict=False).reshape(-1)
+        n, mb = flat.numel(), plan.minibatch_size
+        sums = {k: torch.zeros((), device=self.device) for k in LOSS_LOG_KEYS}
+        clip = self.cfg.optim.max_grad_norm
+        groups = [list(self.actor.parameters()), list(self.critic.parameters())]
+        for _ in range(plan.epochs):
+            perm = torch.randperm(n, device=flat.device)
+            for k in range(plan.minibatches_per_epoch):
+                out = self.loss(flat[perm[k * mb : (k + 1) * mb]])
+                total = out["loss_objective"] + out["loss_entropy"] + out["loss_critic"]
+                total.backward()
+                if clip is not None:
+                    for g in groups:
+                        torch.nn.utils.clip_grad_norm_(g, float(clip))
+                for opt in self.optimizers:
+                    opt.step()
+                    opt.zero_grad(set_to_none=True)
+                for key in LOSS_LOG_KEYS:
+                    if key in out.keys():  # noqa: SIM118 (TensorDict)
+                        sums[key] += out[key].detach().float().mean()
+        for sch in self.schedulers:
+            sch.step()
+        steps = plan.gradient_steps_per_update
+        return {k: v / steps for k, v in sums.items()}
+
+    def _loss_keys(self, data: TensorDict) -> list:
+        keys = set(self.loss.in_keys) | {"advantage", "value_target", "state_value"}
+        return [k for k in keys if k in data.keys(include_nested=True)]
+
+    # -- main loop ----------------------------------------------------------------------------
+    def train(self, stop_after: int | None = None) -> bool:
+        """Run updates until the plan is done (returns True) or ``stop_after`` updates were
+        made in this call (returns False; the state is checkpointed)."""
+        cfg, plan = self.cfg, self.plan
+        if self.logger is None:
+            self.logger = rlb.make_logger(self.run_dir)
+        remaining = plan.n_updates - self.counters["updates"]
+        if remaining <= 0:
+            return True
+        n_run = remaining if stop_after is None else min(remaining, int(stop_after))
+        stop_at = self.counters["updates"] + n_run
+        if self.counters["updates"] == 0 and plan.eval_every:
+            self._periodic_eval()
+        collector = rlb.make_collector(
+            self.env, self.actor, plan, n_run * plan.frames_per_batch, self.device
+        )
+        bar = tqdm(
+            total=plan.total_frames,
+            initial=self.counters["frames"],
+            unit="frame",
+            unit_scale=True,
+            desc="train",
+            disable=not cfg.train.progress,
+            mininterval=5.0,
+        )
+        ref = self.swimmer_env.reference_distance
+        t_ckpt = t_prev = time.perf_counter()
+        try:
+            for data in collector:
+                t_collected = time.perf_counter()
+                done = data["next", "done"].squeeze(-1)
+                r_hat_train = None
+                if bool(done.any()):
+                    dist = data["next", "distance"].squeeze(-1)[done]
+                    r_hat_train = float(dist.mean()) / ref
+                lrs = [s.get_last_lr()[0] for s in self.schedulers]
+                action_abs = data["action"].abs().mean()
+                stats = self.update(data)
+                collector.update_policy_weights_()
+                t_done = time.perf_counter()
+                self.counters["frames"] += plan.frames_per_batch
+                self.counters["updates"] += 1
+                self.counters["wall_s"] += t_done - t_prev
+                u, step = self.counters["updates"], self.counters["frames"]
+                logs = {f"train/{k}": float(v) for k, v in stats.items()}
+                logs.update(
+                    {
+                        "train/lr_actor": lrs[0],
+                        "train/lr_critic": lrs[1],
+                        "train/episodes": self.episodes,
+                        "policy/std": float(log_std(self.actor).detach().exp().mean()),
+                        "policy/abs_action_mean": float(action_abs),
+                        "time/collect_s": t_collected - t_prev,
+                        "time/update_s": t_done - t_collected,
+                        "time/env_frames_per_s": plan.frames_per_batch / (t_collected - t_prev),
+                        "time/frames_per_s": plan.frames_per_batch / (t_done - t_prev),
+                    }
+                )
+                if r_hat_train is not None:
+                    logs["train/R_hat"] = self.last_train_r_hat = r_hat_train
+                for k, v in logs.items():
+                    if math.isfinite(v):
+                        self.logger.log_scalar(k, v, step)
+                bar.update(plan.frames_per_batch)
+                if plan.eval_every and (u % plan.eval_every == 0 or u == plan.n_updates):
+                    self._periodic_eval()
+                post = {"upd": u, "fps": f"{logs['time/frames_per_s']:.0f}"}
+                if self.last_train_r_hat is not None:
+                    post["R_train"] = f"{self.last_train_r_hat:.3f}"
+                if self.last_eval is not None:
+                    post["R_eval"] = f"{self.last_eval['R_hat_mean']:.3f}"
+                bar.set_postfix(post, refresh=False)
+                last = u >= stop_at
+                if (
+                    last
+                    or u % int(cfg.train.checkpoint_every) == 0
+                    or time.perf_counter() - t_ckpt >= float(cfg.train.checkpoint_seconds)
+                ):
+                    self.save_checkpoint()
+                    t_ckpt = time.perf_counter()
+                t_prev = time.perf_counter()
+                if last:
+                    break
+        finally:
+            bar.close()
+            collector.shutdown()
+        return self.finished_training
+
+    def close(self) -> None:
+        if self.logger is not None:
+            self.logger.experiment.flush()
+            self.logger.experiment.close()

@@ -1,0 +1,29 @@
+r"""``swimrl-train``: PPO training of the shape-control policy (paper Sec. II C, App. RL).
+
+    swimrl-train flow.kubo=10                                 # default preset (this CPU)
+    swimrl-train train_preset=paper flow.kubo=10 seed=1       # paper: 5000 episodes
+    swimrl-train hydra.run.dir=outputs/train/ku10 resume=true # continue a killed run
+    swimrl-train -m flow.kubo=0.1,1,10,1e7 seed=0,1,2 hydra/launcher=joblib
+
+Writes into the run directory ``checkpoints/last.pt``, ``policy.pt``, ``tb/`` (TensorBoard)
+and, at the end, ``metrics.json`` (held-out deterministic evaluation, as ``swimrl-eval``).
+See ``docs/training.md``.
+"""
+
+from __future__ import annotations
+
+import hydra
+from omegaconf import DictConfig
+
+from swimrl.paths import CONF_DIR, run_dir
+
+
+@hydra.main(config_path=str(CONF_DIR), config_name="train", version_base="1.3")
+def main(cfg: DictConfig) -> dict | None:
+    from swimrl.rl.run import train  # the training stack is imported only when needed
+
+    return train(cfg, run_dir())
+
+
+if __name__ == "__main__":
+    main()

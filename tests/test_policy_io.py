@@ -1,0 +1,121 @@
+"""Loading trained policies: specs, pretrained short names, signal checks, determinism."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import pytest
+import torch
+from tensordict import TensorDict
+from torchrl.envs.utils import ExplorationType, set_exploration_type
+
+import swimrl.policy_io as pio
+from swimrl.config import ConfigError, EnvParams
+from swimrl.evaluate import evaluate
+from swimrl.rl.checkpoint import policy_meta, save_policy
+from swimrl.rl.models import make_actor, mean_network
+
+from .conftest import SMALL
+
+
+def write_policy(compose_cfg, directory, signals: str = "all", seed: int = 0):
+    """A tiny untrained policy saved as ``directory/policy.pt``; returns its actor."""
+    cfg = compose_cfg(SMALL + [f"signals={signals}"], name="train")
+    params = EnvParams.from_cfg(cfg)
+    torch.manual_seed(seed)
+    actor = make_actor(len(params.signals), params.shape_factor_max)
+    with torch.no_grad():  # a non-trivial mean network
+        for p in mean_network(actor).parameters():
+            p.normal_(0, 0.5)
+    save_policy(
+        directory / "policy.pt",
+        actor=actor,
+        counters={"frames": 0, "updates": 0},
+        config={},
+        meta=policy_meta(cfg, params),
+    )
+    return actor
+
+
+@pytest.fixture
+def pretrained(tmp_path, monkeypatch, compose_cfg):
+    root = tmp_path / "pretrained"
+    for name in ("ku10", "ku1e7"):
+        (root / name).mkdir(parents=True)
+        write_policy(compose_cfg, root / name)
+    monkeypatch.setattr(pio, "PRETRAINED_ROOT", root)
+    return root
+
+
+def test_short_names_resolve_in_the_package_root(pretrained):
+    assert pio.available_pretrained() == ["ku10", "ku1e7"]
+    assert pio.resolve_policy_file("pretrained/ku10") == pretrained / "ku10" / "policy.pt"
+    for alias in ("pretrained/ku1e7", "pretrained/ku1e+07", "pretrained/ku10000000"):
+        assert pio.resolve_policy_file(alias) == pretrained / "ku1e7" / "policy.pt"
+
+
+def test_default_pretrained_root_is_inside_the_package():
+    import swimrl
+
+    expected = Path(swimrl.__file__).resolve().parent / "pretrained"
+    assert expected == pio.PRETRAINED_ROOT
+
+
+def test_missing_pretrained_lists_what_exists(pretrained):
+    with pytest.raises(FileNotFoundError) as err:
+        pio.load_policy("pretrained/ku0.1", EnvParams())
+    msg = str(err.value)
+    assert "ku10, ku1e7" in msg and "ku0.1" in msg and "\n" not in msg
+
+
+def test_missing_paths_are_clear_errors(tmp_path):
+    with pytest.raises(FileNotFoundError, match="no such run directory"):
+        pio.load_policy(str(tmp_path / "nope"), EnvParams())
+    with pytest.raises(FileNotFoundError, match="no policy.pt"):
+        pio.load_policy(str(tmp_path), EnvParams())
+    bad = tmp_path / "bad.pt"
+    torch.save({"x": 1}, bad)
+    with pytest.raises(ValueError, match="not a swimrl-train policy"):
+        pio.load_policy(str(bad), EnvParams())
+
+
+def test_loaded_policy_is_the_deterministic_mean(pretrained, compose_cfg, tmp_path):
+    actor = write_policy(compose_cfg, tmp_path, seed=7)
+    loaded = pio.load_policy(str(tmp_path), EnvParams())  # run dir -> policy.pt
+    same = pio.load_policy(str(tmp_path / "policy.pt"), EnvParams())  # file
+    obs = torch.randn(64, 5)
+    td = TensorDict({"observation": obs}, [64])
+    lam = loaded(td.clone())["action"]
+    assert lam.shape == (64, 1) and lam.abs().max() <= 0.98
+    assert torch.equal(lam, same(td.clone())["action"])
+    with torch.no_grad():
+        assert torch.allclose(lam, 0.98 * torch.tanh(mean_network(actor)(obs)), atol=1e-6)
+        with set_exploration_type(ExplorationType.DETERMINISTIC):
+            det = actor(td.clone())["action"]
+    assert torch.allclose(lam, det, atol=1e-5)
+    # float64 observations work with a float32 policy
+    lam64 = loaded(TensorDict({"observation": obs.double()}, [64]))["action"]
+    assert lam64.dtype == torch.float64 and torch.allclose(lam64.float(), lam, atol=1e-6)
+
+
+def test_signal_set_mismatch_is_one_clear_line(pretrained, compose_cfg, tmp_path):
+    write_policy(compose_cfg, tmp_path, signals="nth_snp")
+    params = EnvParams.from_cfg(compose_cfg(SMALL))  # all five signals
+    with pytest.raises(ConfigError) as err:
+        pio.load_policy(str(tmp_path), params)
+    msg = str(err.value)
+    assert "signals=nth_snp" in msg and "signals.names" in msg and "\n" not in msg
+    ok = EnvParams.from_cfg(compose_cfg(SMALL + ["signals=nth_snp"]))
+    assert pio.load_policy(str(tmp_path), ok) is not None
+
+
+def test_swimrl_eval_with_a_pretrained_policy(pretrained, compose_cfg):
+    cfg = compose_cfg(
+        SMALL + ["strategy=policy", "policy=pretrained/ku10", "eval.n_flows=2", "eval.n_swimmers=8"]
+    )
+    a, b = evaluate(cfg), evaluate(cfg)
+    assert a["strategy"] == "policy" and a["R_hat_mean"] > 0
+    assert a["per_flow"] == b["per_flow"]  # deterministic policy, same flows
+    bad = compose_cfg(SMALL + ["strategy=policy", "policy=pretrained/ku10", "signals=nth_snp"])
+    with pytest.raises(ConfigError, match="signals=all"):
+        evaluate(bad)

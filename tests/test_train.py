@@ -1,0 +1,318 @@
+"""PPO training pipeline: end to end, checkpoint/resume, config errors, sweeps (tiny sizes)."""
+
+from __future__ import annotations
+
+import copy
+import json
+import math
+import subprocess
+import sys
+
+import pytest
+import torch
+from tensorboard.backend.event_processing.event_accumulator import EventAccumulator
+
+from swimrl.config import ConfigError
+from swimrl.rl.builders import auto_reward_scale, make_env
+from swimrl.rl.checkpoint import checkpoint_path, load_file
+from swimrl.rl.plan import EVAL_SEED_OFFSET, validate_train_cfg
+from swimrl.rl.run import train
+from swimrl.rl.trainer import PPOTrainer
+
+from .conftest import SMALL
+
+# 2 flows x 4 swimmers, episodes of N = 20 decisions, batches of L = 10: 4 updates
+TINY = SMALL + [
+    "train.n_flows=2",
+    "train.n_swimmers=4",
+    "train.frames_per_batch=80",
+    "train.total_frames=320",
+    "train.minibatch_size=40",
+    "train.eval_every=2",
+    "train.eval_flows=1",
+    "train.eval_swimmers=4",
+    "train.checkpoint_every=1",
+    "train.progress=false",
+    "eval.n_flows=2",
+    "eval.n_swimmers=4",
+]
+
+
+@pytest.fixture
+def train_cfg(compose_cfg):
+    def _cfg(*overrides):
+        return compose_cfg(TINY + list(overrides), name="train")
+
+    return _cfg
+
+
+def scalars(run_dir) -> dict[str, list[tuple[int, float]]]:
+    ea = EventAccumulator(str(run_dir / "tb" / "ppo"))
+    ea.Reload()
+    return {t: [(e.step, e.value) for e in ea.Scalars(t)] for t in ea.Tags()["scalars"]}
+
+
+def test_ppo_end_to_end(train_cfg, tmp_path):
+    cfg = train_cfg()
+    metrics = train(cfg, tmp_path)
+    assert math.isfinite(metrics["R_hat_mean"]) and metrics["R_hat_mean"] > 0
+    assert metrics["seed"] == EVAL_SEED_OFFSET and metrics["strategy"] == "policy"
+    assert metrics["training"]["updates"] == 4 and metrics["training"]["frames"] == 320
+    on_disk = json.loads((tmp_path / "metrics.json").read_text())
+    assert on_disk["R_hat_mean"] == metrics["R_hat_mean"]
+    assert (tmp_path / "policy.pt").is_file() and checkpoint_path(tmp_path).is_file()
+    assert list((tmp_path / "tb" / "ppo").glob("events.out.tfevents.*"))
+    s = scalars(tmp_path)
+    for tag in (
+        "train/loss_objective",
+        "train/loss_critic",
+        "train/loss_entropy",
+        "train/kl_approx",
+        "train/clip_fraction",
+        "train/lr_actor",
+        "train/lr_critic",
+        "policy/std",
+        "time/frames_per_s",
+    ):
+        assert len(s[tag]) == 4 and all(math.isfinite(v) for _, v in s[tag]), tag
+    assert [step for step, _ in s["train/loss_critic"]] == [80, 160, 240, 320]
+    assert [step for step, _ in s["eval/R_hat"]] == [0, 160, 320]  # initial policy first
+    assert "train/R_hat" in s  # episodes of 20 decisions finish every other batch
+    lr = [v for _, v in s["train/lr_actor"]]
+    lr0 = cfg.optim.lr_actor
+    assert lr == pytest.approx([lr0 * (1 - u / 4) for u in range(4)], rel=1e-5)
+
+
+def test_validation_precedes_compute(train_cfg, tmp_path, monkeypatch):
+    import swimrl.builders as builders
+
+    def boom(*a, **k):
+        raise AssertionError("flow built before validation")
+
+    monkeypatch.setattr(builders, "build_flow", boom)
+    with pytest.raises(ValueError, match="train.frames_per_batch"):
+        train(train_cfg("train.frames_per_batch=81"), tmp_path)
+    assert not (tmp_path / "tb").exists()
+
+
+@pytest.mark.parametrize(
+    ("override", "key"),
+    [
+        ("train.frames_per_batch=81", "train.frames_per_batch"),
+        ("train.total_frames=40", "train.total_frames"),
+        ("train.minibatch_size=100", "train.minibatch_size"),
+        ("train.minibatches_per_epoch=3", "train.minibatches_per_epoch"),
+        ("train.epochs=0", "train.epochs"),
+        ("train.n_swimmers=0", "train.n_swimmers"),
+        ("train.reward_scale=-1", "train.reward_scale"),
+        ("train.eval_every=-1", "train.eval_every"),
+        ("loss.clip_epsilon=0", "loss.clip_epsilon"),
+        ("loss.gamma=1.5", "loss.gamma"),
+        ("loss.loss_critic_type=huber", "loss.loss_critic_type"),
+        ("optim.lr_actor=0", "optim.lr_actor"),
+        ("optim.anneal=cosine", "optim.anneal"),
+        ("model.hidden=[]", "model.hidden"),
+        ("model.activation=gelu", "model.activation"),
+        ("flow.kubo=0", "flow.kubo"),
+        ("episode.dt=0.03", "episode.dt"),
+        ("swimmer.swim_speed=-1", "swimmer.swim_speed"),
+        ("signals.names=[n_r,foo]", "signals.names"),
+        ("eval.n_flows=0", "eval.n_flows"),
+    ],
+)
+def test_bad_config_names_the_key(train_cfg, override, key):
+    with pytest.raises(ValueError) as err:
+        validate_train_cfg(train_cfg(override))
+    msg = str(err.value)
+    assert key in msg and "\n" not in msg
+
+
+def test_plan_and_reward_scale(train_cfg):
+    plan = validate_train_cfg(train_cfg("train.total_frames=330"))
+    assert (plan.n_updates, plan.total_frames, plan.rollout_steps) == (4, 320, 10)
+    assert plan.minibatches_per_epoch == 2 and plan.frames_per_episode == 4 * 20
+    env = make_env(train_cfg(), plan, torch.device("cpu"), torch.float32)
+    base = env.base_env
+    scale = auto_reward_scale(base, 0.99)
+    # (1 - gamma) / (v_s T_u), flow units: v_s = 0.707 u_rms, T_u = 0.1 tau_K
+    assert scale == pytest.approx(0.01 / (0.707 * base.flow.u_rms * 0.1 * base.flow.tau_k))
+    td = env.rollout(3, break_when_any_done=False)
+    d = torch.cat(
+        [torch.zeros_like(td["next", "distance"][..., :1, :]), td["next", "distance"]], -2
+    )
+    assert torch.allclose(td["next", "reward"], scale * d.diff(dim=-2), atol=1e-6)
+
+
+def _snapshot(trainer: PPOTrainer) -> dict:
+    return {
+        "actor": copy.deepcopy(trainer.actor.state_dict()),
+        "critic": copy.deepcopy(trainer.critic.state_dict()),
+        "optim": [copy.deepcopy(o.state_dict()) for o in trainer.optimizers],
+        "sched": [copy.deepcopy(s.state_dict()) for s in trainer.schedulers],
+        "counters": dict(trainer.counters),
+        "torch_rng": torch.get_rng_state().clone(),
+        "env_rng": trainer.swimmer_env.generator.get_state().clone(),
+    }
+
+
+def _assert_same(a, b) -> None:
+    if isinstance(a, torch.Tensor):
+        assert torch.equal(a, b)
+    elif isinstance(a, dict):
+        assert a.keys() == b.keys()
+        for k in a:
+            _assert_same(a[k], b[k])
+    elif isinstance(a, list | tuple):
+        assert len(a) == len(b)
+        for x, y in zip(a, b, strict=True):
+            _assert_same(x, y)
+    else:
+        assert a == b
+
+
+def test_kill_and_resume_round_trip(train_cfg, tmp_path, monkeypatch):
+    """A crash after update 3 (checkpoint of update 2 kept, stray .tmp left as by kill -9)
+    resumes from update 2 with identical state and finishes the remaining updates."""
+    saved = {}
+    original_save, original_update = PPOTrainer.save_checkpoint, PPOTrainer.update
+
+    def spy_save(self):
+        path = original_save(self)
+        saved[self.counters["updates"]] = _snapshot(self)
+        return path
+
+    def crashing_update(self, data):
+        if self.counters["updates"] == 2:
+            checkpoint_path(self.run_dir).with_suffix(".pt.tmp").write_bytes(b"partial")
+            raise KeyboardInterrupt("simulated kill")
+        return original_update(self, data)
+
+    monkeypatch.setattr(PPOTrainer, "save_checkpoint", spy_save)
+    monkeypatch.setattr(PPOTrainer, "update", crashing_update)
+    with pytest.raises(KeyboardInterrupt):
+        train(train_cfg(), tmp_path)
+    assert sorted(saved) == [1, 2] and not (tmp_path / "metrics.json").exists()
+    assert load_file(checkpoint_path(tmp_path))["counters"]["updates"] == 2
+    monkeypatch.setattr(PPOTrainer, "update", original_update)
+
+    # a new run in a dir with a checkpoint needs resume=true; the config must match
+    with pytest.raises(FileExistsError, match="resume=true"):
+        train(train_cfg(), tmp_path)
+    with pytest.raises(ConfigError, match="loss.gamma"):
+        train(train_cfg("resume=true", "loss.gamma=0.9"), tmp_path)
+
+    # restore reproduces the state at the checkpoint exactly
+    cfg = train_cfg("resume=true")
+    trainer = PPOTrainer(cfg, validate_train_cfg(cfg), tmp_path, torch.device("cpu"), torch.float32)
+    trainer.restore(checkpoint_path(tmp_path))
+    _assert_same(_snapshot(trainer), saved[2])
+
+    # resuming continues at update 3, never redoes 1-2, and finishes
+    saved.clear()
+    metrics = train(cfg, tmp_path)
+    assert sorted(saved) == [3, 4]
+    assert metrics["training"]["updates"] == 4 and metrics["training"]["frames"] == 320
+    steps = [s for s, _ in scalars(tmp_path)["train/loss_objective"]]
+    assert sorted(set(steps)) == [80, 160, 240, 320]
+    assert saved[4]["sched"][0]["last_epoch"] == 4
+
+    # a finished run is never silently overwritten
+    for extra in ((), ("resume=true",)):
+        with pytest.raises(FileExistsError, match="overwrite=true"):
+            train(train_cfg(*extra), tmp_path)
+    before = (tmp_path / "metrics.json").read_text()
+    assert (tmp_path / "metrics.json").read_text() == before
+
+
+def test_stop_after_updates_then_resume(train_cfg, tmp_path):
+    assert train(train_cfg("train.stop_after_updates=3", "train.eval_every=0"), tmp_path) is None
+    assert load_file(checkpoint_path(tmp_path))["counters"]["updates"] == 3
+    m = train(train_cfg("resume=true", "train.eval_every=0"), tmp_path)
+    assert m["training"]["updates"] == 4
+    again = train(train_cfg("overwrite=true", "train.eval_every=0"), tmp_path)
+    assert again["training"]["updates"] == 4
+
+
+def test_training_and_evaluation_flows_differ(train_cfg):
+    from swimrl.evaluate import chunk_seed
+
+    plan = validate_train_cfg(train_cfg("seed=3"))
+    assert plan.eval_seed == 3 + EVAL_SEED_OFFSET
+    eval_seeds = {chunk_seed(s, c) for s in (0, 1, 2, 3, plan.eval_seed) for c in range(100)}
+    assert plan.train_seed not in eval_seeds
+
+
+def _cli(args, cwd, timeout=240):
+    cmd = [sys.executable, "-m", "swimrl.train", *args]
+    return subprocess.run(cmd, capture_output=True, text=True, cwd=cwd, timeout=timeout)
+
+
+def test_cli_multirun_joblib(tmp_path):
+    sweep = tmp_path / "sweep"
+    out = _cli(
+        [
+            "-m",
+            *TINY,
+            "train.eval_every=0",
+            "seed=0,1",
+            "hydra/launcher=joblib",
+            "hydra.launcher.n_jobs=2",
+            f"hydra.sweep.dir={sweep}",
+        ],
+        tmp_path,
+    )
+    assert out.returncode == 0, out.stderr[-3000:]
+    runs = sorted(p.parent.name for p in sweep.rglob("metrics.json"))
+    assert runs == ["0", "1"]
+    seeds = {json.loads((sweep / r / "metrics.json").read_text())["config"]["seed"] for r in runs}
+    assert seeds == {0, 1}
+    table = subprocess.run(
+        [sys.executable, "-m", "swimrl.table", str(sweep), "--csv", str(tmp_path / "t.csv")],
+        capture_output=True,
+        text=True,
+    )
+    assert table.returncode == 0, table.stderr
+    assert table.stdout.startswith("| run | seed | strategy |")
+    assert (tmp_path / "t.csv").read_text().startswith("run,seed,strategy,R_hat_mean")
+
+
+def test_cli_multirun_submitit_local(tmp_path):
+    sweep = tmp_path / "sweep"
+    out = _cli(
+        [
+            "-m",
+            *TINY,
+            "train.eval_every=0",
+            "flow.kubo=1,10",
+            "hydra/launcher=submitit_local",
+            "hydra.launcher.timeout_min=5",
+            f"hydra.sweep.dir={sweep}",
+        ],
+        tmp_path,
+        timeout=400,
+    )
+    assert out.returncode == 0, out.stderr[-3000:]
+    kubo = sorted(
+        json.loads(p.read_text())["config"]["flow"]["kubo"] for p in sweep.rglob("metrics.json")
+    )
+    assert kubo == [1, 10]
+
+
+def test_slurm_launcher_preset_composes():
+    from hydra import compose, initialize_config_dir
+
+    from swimrl.paths import CONF_DIR
+
+    with initialize_config_dir(config_dir=str(CONF_DIR), version_base="1.3"):
+        cfg = compose(
+            "train",
+            overrides=["hydra/launcher=slurm", "train_preset=paper"],
+            return_hydra_config=True,
+        )
+    launcher = cfg.hydra.launcher
+    assert launcher._target_.endswith("SlurmLauncher")
+    assert launcher.cpus_per_task == 1 and launcher.max_num_timeout >= 1
+    assert cfg.train.total_frames == 5000 * 10 * 2000  # paper: 5000 episodes of 10 swimmers
+    assert (cfg.optim.lr_actor, cfg.optim.lr_critic) == (4e-4, 8e-5)
+    plan = validate_train_cfg(cfg)
+    assert plan.n_updates == 20000 and plan.gradient_steps_per_update == 800
