@@ -27,6 +27,7 @@ from swimrl.evaluate import summary_line, write_metrics
 from swimrl.rl.checkpoint import checkpoint_path, load_file
 from swimrl.rl.plan import validate_train_cfg
 from swimrl.rl.trainer import PPOTrainer
+from swimrl.table import flatten
 
 log = logging.getLogger(__name__)
 
@@ -49,20 +50,9 @@ RESUME_FREE_KEYS = {
 RESUME_FREE_PREFIXES = ("eval.", "hydra.")
 
 
-def _flatten(d: dict, prefix: str = "") -> dict:
-    out = {}
-    for k, v in d.items():
-        key = f"{prefix}{k}"
-        if isinstance(v, dict):
-            out.update(_flatten(v, key + "."))
-        else:
-            out[key] = v
-    return out
-
-
 def config_differences(old: dict, new: dict) -> list[str]:
     """``key: old -> new`` for the keys that matter to the training trajectory."""
-    a, b = _flatten(old), _flatten(new)
+    a, b = flatten(old), flatten(new)
     diffs = []
     for key in sorted(set(a) | set(b)):
         if key in RESUME_FREE_KEYS or key.startswith(RESUME_FREE_PREFIXES):
