@@ -41,6 +41,30 @@ def build_flow(
     Replayed flows need the episode ``params`` (interval and duration in units of tau_K).
     """
     validate_flow_cfg(cfg_flow)
+    if cfg_flow.name == "dns":
+        from swimrl.flows.dns import DNSParams
+        from swimrl.flows.live_dns import LiveDNSFlow, LiveDNSRun
+
+        params = params or EnvParams()
+        dns_params = DNSParams.from_mapping(
+            {**cfg_flow.dns, "device": str(device), "dtype": str(dtype).replace("torch.", "")}
+        )
+        seeds = torch.randint(0, 2**31 - 1, (n_flows,), generator=generator, device=device)
+        run = LiveDNSRun(
+            dns_params,
+            [int(x) for x in seeds.tolist()],
+            spinup_time=float(cfg_flow.spinup_time),
+            measure_time=float(cfg_flow.measure_time),
+            snapshot_tau_k=float(cfg_flow.snapshot_tau_k),
+        )
+        return LiveDNSFlow(
+            run,
+            interval=params.update_interval * run.tau_k,
+            episode_time=params.duration * run.tau_k,
+            device=device,
+            dtype=dtype,
+            generator=generator,
+        )
     if cfg_flow.name == "dns_replay":
         from swimrl.flows.dns.store import DNSStore
         from swimrl.flows.replay import ReplayFlow

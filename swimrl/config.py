@@ -16,7 +16,7 @@ from swimrl.signals import SIGNAL_NAMES, signal_indices
 
 SHAPE_FACTOR_LIMIT = 1.0
 STRATEGIES = ("naive", "sto", "minimal", "policy")
-FLOWS = ("stochastic", "dns_replay")
+FLOWS = ("stochastic", "dns_replay", "dns")
 
 
 class ConfigError(ValueError):
@@ -128,6 +128,18 @@ def validate_flow_cfg(flow) -> None:
         n = int(flow.n_grid)
         _check(n >= 4 and n % 2 == 0, "flow.n_grid", flow.n_grid, "even integer >= 4")
         _check(float(flow.spacing) > 0, "flow.spacing", flow.spacing, "> 0 (units ell_f)")
+    if flow.name == "dns":
+        from swimrl.flows.dns import DNSParams
+
+        DNSParams.from_mapping(dict(flow.dns))  # raises DNSParamError naming the key
+        for key in ("spinup_time", "measure_time", "snapshot_tau_k"):
+            _check(float(flow[key]) > 0, f"flow.{key}", flow[key], "> 0")
+        _check(
+            float(flow.measure_time) <= float(flow.spinup_time),
+            "flow.measure_time",
+            flow.measure_time,
+            f"<= flow.spinup_time={flow.spinup_time}",
+        )
     if flow.name == "dns_replay":
         path = Path(str(flow.path))
         _check(

@@ -94,3 +94,55 @@ def test_env_on_replay_uses_the_runs_units():
     td = env.rollout(env.params.n_decisions)
     assert torch.isfinite(td["next", "distance"]).all()
     assert td["next", "truncated"][..., -1, :].all()
+
+
+def test_live_dns_flow_matches_its_solver(compose_cfg):
+    """flow=dns: a small live DNS; grid fields equal the solver's channels at snapshot times
+    and the swimmer units are the measured u_rms and tau_K."""
+    from swimrl.builders import build_env
+    from swimrl.flows.dns import flow_channels
+
+    cfg = compose_cfg(
+        [
+            "flow=dns",
+            "flow.dns.n=32",
+            "flow.dns.nu=2e-3",
+            "flow.dns.dt=5e-3",
+            "flow.spinup_time=1.0",
+            "flow.measure_time=0.5",
+            "episode.duration=2.0",
+            "threads=1",
+            "kernel=eager",
+        ]
+    )
+    env = build_env(cfg, 2, 4, 0, torch.device("cpu"), torch.float32)
+    flow, run = env.flow, env.flow.source
+    assert env.tau_k == pytest.approx(run.tau_k) and env.swim_speed == pytest.approx(
+        0.707 * run.u_rms
+    )
+    assert 0 < run.u_rms < 10 and 0 < run.tau_k < 10
+    td = env.reset()
+    start = int(flow.start[0])
+    assert int(flow.start[1]) == start  # both realisations start at the run's current time
+    # at t = 0 each flow is its solver realisation at the start snapshot ...
+    assert torch.allclose(flow.grid_fields(), run.cache[start], atol=1e-6)
+    # ... and the newest cached snapshot is the solver's current state
+    q_now = flow_channels(run.dns.state.omega_hat, run.dns.grid)
+    assert torch.equal(run.cache[run.latest], q_now)
+    for _ in range(5):
+        td = env.step(td.set("action", torch.zeros(2, 4, 1))).get("next")
+    assert int(flow.window_start[0]) > start  # the solver advanced with the swimmers
+    for m in range(flow.n_basis):  # the window holds the solver's snapshots
+        j = int(flow.window_start[0]) + m
+        assert torch.equal(flow.basis[:, :, :, m], run.cache[j])
+    assert torch.isfinite(td["distance"]).all()
+    assert torch.allclose(flow.coeffs.sum(-1), torch.ones(2))
+
+
+def test_live_dns_bad_parameter_is_named(compose_cfg):
+    from swimrl.evaluate import validate_eval_cfg
+
+    with pytest.raises(ValueError, match="flow.measure_time"):
+        validate_eval_cfg(compose_cfg(["flow=dns", "flow.measure_time=20"]))
+    with pytest.raises(ValueError, match="nu"):
+        validate_eval_cfg(compose_cfg(["flow=dns", "flow.dns.nu=-1"]))

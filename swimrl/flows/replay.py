@@ -96,6 +96,10 @@ class ReplayFlow(GriddedFlow):
         self._load_window(idx, self.start[idx])
         self.coeffs[idx.to(self.device)] = self._weights(self.time[idx.to(self.time.device)], idx)
 
+    def _read(self, flow: int, i0: int, i1: int) -> torch.Tensor:
+        """Snapshots ``i0 <= j < i1`` seen by ``flow`` (a replay: the same run for all)."""
+        return self.source.channels(i0, i1)
+
     def _load_window(self, flows: torch.Tensor, first: torch.Tensor) -> None:
         """Make snapshots ``first .. first + M - 1`` the basis of each flow in ``flows``."""
         m = self.n_basis
@@ -104,10 +108,10 @@ class ReplayFlow(GriddedFlow):
             shift = j0 - old
             if 0 < shift < m:  # keep the overlap, read only the new snapshots
                 self.basis[f, :, :, : m - shift] = self.basis[f, :, :, shift:].clone()
-                new = self.source.channels(old + m, j0 + m)
+                new = self._read(f, old + m, j0 + m)
                 self.basis[f, :, :, m - shift :] = new.permute(1, 2, 0, 3).to(self.basis)
             elif shift != 0:
-                snaps = self.source.channels(j0, j0 + m)
+                snaps = self._read(f, j0, j0 + m)
                 self.basis[f] = snaps.permute(1, 2, 0, 3).to(self.basis)
             self.window_start[f] = j0
 
