@@ -28,6 +28,14 @@ def setup_runtime(cfg: DictConfig) -> tuple[torch.device, torch.dtype]:
     return device, dtype
 
 
+def _replay_times(params: EnvParams, tau_k: float) -> dict[str, float]:
+    """Decision interval and episode duration in the units of a DNS with Kolmogorov time tau_k."""
+    return {
+        "interval": params.update_interval * tau_k,
+        "episode_time": params.duration * tau_k,
+    }
+
+
 def build_flow(
     cfg_flow: DictConfig,
     n_flows: int,
@@ -41,6 +49,7 @@ def build_flow(
     Replayed flows need the episode ``params`` (interval and duration in units of tau_K).
     """
     validate_flow_cfg(cfg_flow)
+    common = {"device": device, "dtype": dtype, "generator": generator}
     if cfg_flow.name == "dns":
         from swimrl.flows.dns import DNSParams
         from swimrl.flows.live_dns import LiveDNSFlow, LiveDNSRun
@@ -57,29 +66,14 @@ def build_flow(
             measure_time=float(cfg_flow.measure_time),
             snapshot_tau_k=float(cfg_flow.snapshot_tau_k),
         )
-        return LiveDNSFlow(
-            run,
-            interval=params.update_interval * run.tau_k,
-            episode_time=params.duration * run.tau_k,
-            device=device,
-            dtype=dtype,
-            generator=generator,
-        )
+        return LiveDNSFlow(run, **_replay_times(params, run.tau_k), **common)
     if cfg_flow.name == "dns_replay":
         from swimrl.flows.dns.store import DNSStore
         from swimrl.flows.replay import ReplayFlow
 
         params = params or EnvParams()
         store = DNSStore(Path(str(cfg_flow.path)))
-        return ReplayFlow(
-            store,
-            n_flows,
-            interval=params.update_interval * store.tau_k,
-            episode_time=params.duration * store.tau_k,
-            device=device,
-            dtype=dtype,
-            generator=generator,
-        )
+        return ReplayFlow(store, n_flows, **_replay_times(params, store.tau_k), **common)
     if cfg_flow.name == "stochastic":
         return StochasticFlow(
             n_flows,

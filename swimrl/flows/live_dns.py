@@ -99,14 +99,6 @@ class LiveDNSFlow(ReplayFlow):
     def _read(self, flow: int, i0: int, i1: int) -> torch.Tensor:
         return self.source.channels_of(flow, i0, i1)
 
-    def reset(self, flows: torch.Tensor | None = None) -> None:
+    def start_indices(self, count: int) -> torch.Tensor:
         """New episodes start at the run's current snapshot (no new spin-up)."""
-        sel = torch.ones(self.n_flows, dtype=torch.bool) if flows is None else flows.cpu()
-        idx = sel.nonzero().flatten()
-        if idx.numel() == 0:
-            return
-        self.start[idx] = self.source.latest
-        self.time[idx.to(self.time.device)] = 0.0
-        self.window_start[idx] = -(10**9)
-        self._load_window(idx, self.start[idx])
-        self.coeffs[idx.to(self.device)] = self._weights(self.time[idx.to(self.time.device)], idx)
+        return torch.full((count,), self.source.latest, dtype=torch.int64)

@@ -81,16 +81,19 @@ class ReplayFlow(GriddedFlow):
         self.window_start = torch.full((n_flows,), -(10**9), dtype=torch.int64)
         self.reset()
 
+    def start_indices(self, count: int) -> torch.Tensor:
+        """Stored index of ``t = 0`` for ``count`` new episodes: ``j ~ U{0..max_start}``."""
+        return torch.randint(
+            0, self.max_start + 1, (count,), generator=self.generator, device=self.device
+        ).cpu()
+
     def reset(self, flows: torch.Tensor | None = None) -> None:
-        """New random start times ``j ~ U{0..max_start}`` for the selected flows."""
+        """New episodes (from :meth:`start_indices`) for the selected flows."""
         sel = torch.ones(self.n_flows, dtype=torch.bool) if flows is None else flows.cpu()
         idx = sel.nonzero().flatten()
         if idx.numel() == 0:
             return
-        draw = torch.randint(
-            0, self.max_start + 1, (idx.numel(),), generator=self.generator, device=self.device
-        ).cpu()
-        self.start[idx] = draw
+        self.start[idx] = self.start_indices(idx.numel())
         self.time[idx.to(self.time.device)] = 0.0
         self.window_start[idx] = -(10**9)
         self._load_window(idx, self.start[idx])
