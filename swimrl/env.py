@@ -112,21 +112,23 @@ class SwimmerEnv(EnvBase):
         self.pos.sub_(shift * length)
         self.image.add_(shift.to(torch.int64))
 
-    def signals(self) -> torch.Tensor:
-        """All five signals at the current state, ``(F, S, 5)``."""
+    def signals(self, displacement: torch.Tensor | None = None) -> torch.Tensor:
+        """All five signals at the current state, ``(F, S, 5)`` (``displacement``: ``x - x0``
+        if already at hand)."""
+        if displacement is None:
+            displacement = self.displacement()
         q = self.flow.sample(self._flow_index, self.pos.view(-1, 2))
-        return compute_signals(
-            q.view(*self.batch_size, 5), self.theta, self.displacement(), self.tau_k
-        )
+        return compute_signals(q.view(*self.batch_size, 5), self.theta, displacement, self.tau_k)
 
     def _observe(self) -> TensorDict:
-        sig = self.signals()
+        disp = self.displacement()
+        sig = self.signals(disp)
         truncated = (self.step_count >= self.params.n_decisions).unsqueeze(-1)
         return TensorDict(
             {
                 "observation": sig[..., self._obs_idx],
                 "signals": sig,
-                "distance": self.displacement().norm(dim=-1, keepdim=True),
+                "distance": disp.norm(dim=-1, keepdim=True),
                 "done": truncated.clone(),
                 "terminated": torch.zeros_like(truncated),
                 "truncated": truncated,
