@@ -7,7 +7,9 @@ strategy's ``R_hat`` (mean +- SEM over flows) the table reports the ratio of its
 Outputs in the run directory: ``comparison.json``, ``comparison.md`` and,
 for a scan of constant shape factors, ``naive_scan.png`` (``R_hat`` against ``Lambda``).
 
-    swimrl-compare flow.kubo=10                      # naive vs STO (the README main job)
+    swimrl-compare flow.kubo=10                      # naive vs STO
+    swimrl-compare flow.kubo=10 'compare.strategies=[naive,sto,policy]' \
+        'compare.policies=[pretrained/ku10,outputs/train/my_run]'   # + trained policies
     swimrl-naive-scan flow.kubo=10                   # constant Lambda over [-0.98, 0.98]
 """
 
@@ -22,16 +24,17 @@ import hydra
 import numpy as np
 from omegaconf import DictConfig, OmegaConf, open_dict
 
-from swimrl.evaluate import evaluate, summary_line, validate_eval_cfg
+from swimrl.evaluate import evaluate, load_actor, summary_line, validate_eval_cfg
 from swimrl.paths import CONF_DIR, run_dir
 
 log = logging.getLogger(__name__)
 
 
-def strategy_variants(cfg: DictConfig) -> list[tuple[str, DictConfig]]:
-    """(label, strategy config) for ``compare.strategies``; ``naive`` expands over
-    ``compare.naive_shape_factors`` and ``minimal`` takes ``compare.minimal`` coefficients."""
-    out = []
+def strategy_variants(cfg: DictConfig) -> list[tuple[str, DictConfig, str | None]]:
+    """(label, strategy config, policy) for ``compare.strategies``; ``naive`` expands over
+    ``compare.naive_shape_factors``, ``minimal`` takes ``compare.minimal`` coefficients and
+    ``policy`` expands over ``compare.policies`` (run dirs, checkpoints, ``pretrained/NAME``)."""
+    out: list[tuple[str, DictConfig, str | None]] = []
     for name in cfg.compare.strategies:
         if name == "naive":
             for lam in cfg.compare.naive_shape_factors:
@@ -39,16 +42,30 @@ def strategy_variants(cfg: DictConfig) -> list[tuple[str, DictConfig]]:
                     (
                         f"naive({float(lam):+.2f})",
                         OmegaConf.create({"name": "naive", "shape_factor": float(lam)}),
+                        None,
                     )
                 )
         elif name == "sto":
-            out.append(("sto", OmegaConf.create({"name": "sto"})))
+            out.append(("sto", OmegaConf.create({"name": "sto"}), None))
         elif name == "minimal":
-            out.append(("minimal", OmegaConf.create({"name": "minimal", **cfg.compare.minimal})))
+            out.append(
+                ("minimal", OmegaConf.create({"name": "minimal", **cfg.compare.minimal}), None)
+            )
+        elif name == "policy":
+            policies = list(cfg.compare.get("policies") or [])
+            if not policies:
+                raise ValueError("compare.strategies has 'policy' but compare.policies is empty: "
+                                 "allowed a list of run dirs, checkpoints or pretrained/NAME")
+            for pol in policies:
+                out.append((f"policy({pol})", OmegaConf.create({"name": "policy"}), str(pol)))
         else:
-            raise ValueError(f"compare.strategies has {name!r}: allowed 'naive', 'sto', 'minimal'")
+            raise ValueError(
+                f"compare.strategies has {name!r}: allowed 'naive', 'sto', 'minimal', 'policy'"
+            )
     if not out:
-        raise ValueError("compare.strategies is empty: allowed a list of 'naive', 'sto', 'minimal'")
+        raise ValueError(
+            "compare.strategies is empty: allowed a list of 'naive', 'sto', 'minimal', 'policy'"
+        )
     return out
 
 
@@ -56,16 +73,22 @@ def compare(cfg: DictConfig) -> dict:
     """Evaluate all variants (validated first) and return the comparison record."""
     variants = strategy_variants(cfg)
     cfgs = []
-    for _, strat in variants:
+    actors = []
+    for _, strat, policy in variants:
         c = copy.deepcopy(cfg)
         with open_dict(c):
             c.strategy = strat
-        validate_eval_cfg(c)
-        evaluate_check_strategy(c)
+            c.policy = policy
+        params = validate_eval_cfg(c)
+        if policy is None:
+            evaluate_check_strategy(c)
+            actors.append(None)
+        else:  # load (and check the signal set of) every policy before any compute
+            actors.append(load_actor(c, params))
         cfgs.append(c)
     results = []
-    for (label, _), c in zip(variants, cfgs, strict=True):
-        m = evaluate(c)
+    for (label, _, _), c, actor in zip(variants, cfgs, actors, strict=True):
+        m = evaluate(c, actor=actor)
         m["label"] = label
         print(summary_line(m), flush=True)
         results.append(m)

@@ -146,3 +146,22 @@ def test_plots_from_a_small_store(tmp_path):
         assert (tmp_path / "img" / f"dns_{name}.png").stat().st_size > 1000
     assert summary["n_times"] == 6 and math.isfinite(summary["spectrum_slope"])
     assert set(summary["moments"]) == {"omega", "S_xx", "S_xy"}
+
+
+def test_finished_store_extends_to_the_longer_run(tmp_path):
+    """store.extend=true appends to a finished store exactly what a longer run stores."""
+    ref = DNSStore(run_dns(_cfg(tmp_path / "ref.zarr", "store.n_times=9")))
+    path = tmp_path / "ext.zarr"
+    run_dns(_cfg(path))
+    for n_times, msg in (("6", r"store.n_times > 6 .* got 6"), ("4", r"got 4")):
+        with pytest.raises(ValueError, match=msg):
+            run_dns(_cfg(path, f"store.n_times={n_times}", "store.extend=true"))
+    with pytest.raises(FileExistsError, match="store.extend=true"):
+        run_dns(_cfg(path, "store.n_times=9"))
+    run_dns(_cfg(path, "store.n_times=9", "store.extend=true"))
+    ext = DNSStore(path)
+    assert ext.complete and ext.n_times == ref.n_times == 9
+    assert np.array_equal(ext.times, ref.times)
+    assert torch.equal(ext.omega_hat(0, 9), ref.omega_hat(0, 9))
+    assert math.isclose(ext.u_rms, ref.u_rms, rel_tol=1e-12)
+    assert math.isclose(ext.tau_k, ref.tau_k, rel_tol=1e-12)

@@ -119,3 +119,41 @@ def test_swimrl_eval_with_a_pretrained_policy(pretrained, compose_cfg):
     bad = compose_cfg(SMALL + ["strategy=policy", "policy=pretrained/ku10", "signals=nth_snp"])
     with pytest.raises(ConfigError, match="signals=all"):
         evaluate(bad)
+
+
+def test_compare_pairs_policies_with_the_baselines(pretrained, compose_cfg):
+    """``compare.strategies=[sto,policy]``: the policy row is the same numbers as swimrl-eval."""
+    from swimrl.compare import compare
+
+    size = ["eval.n_flows=2", "eval.n_swimmers=8"]
+    cfg = compose_cfg(SMALL + size + ["compare.strategies=[sto,policy]",
+                                      "compare.policies=[pretrained/ku10,pretrained/ku1e7]"],
+                      name="compare")
+    rec = compare(cfg)
+    assert [r["label"] for r in rec["rows"]] == [
+        "sto", "policy(pretrained/ku10)", "policy(pretrained/ku1e7)"]
+    alone = evaluate(compose_cfg(SMALL + size + ["strategy=policy", "policy=pretrained/ku10"]))
+    assert rec["rows"][1]["per_flow"] == alone["per_flow"]
+    sto = evaluate(compose_cfg(SMALL + size + ["strategy=sto"]))
+    assert rec["rows"][0]["per_flow"] == sto["per_flow"]
+    ratio = sum(alone["per_flow"]) / sum(sto["per_flow"])
+    assert rec["rows"][1]["ratio_to_first"] == pytest.approx(ratio, rel=1e-12)
+    for bad, match in ((["compare.policies=[]"], "compare.policies is empty"),
+                       (["compare.policies=[pretrained/nope]"], "nope")):
+        with pytest.raises((ValueError, FileNotFoundError), match=match):
+            compare(compose_cfg(SMALL + size + ["compare.strategies=[sto,policy]", *bad],
+                                name="compare"))
+
+
+def test_gain_scan_gain_one_is_the_policy_and_gain_zero_is_spherical(pretrained, compose_cfg):
+    from swimrl.gain_scan import gain_scan
+
+    size = ["eval.n_flows=2", "eval.n_swimmers=8"]
+    rows = gain_scan(compose_cfg(SMALL + size + ["policy=pretrained/ku10", "gains=[1,0]"],
+                                 name="gain_scan"))
+    alone = evaluate(compose_cfg(SMALL + size + ["strategy=policy", "policy=pretrained/ku10"]))
+    assert rows[0]["per_flow"] == alone["per_flow"]
+    naive0 = evaluate(compose_cfg(SMALL + size + ["strategy=naive", "strategy.shape_factor=0"]))
+    assert rows[1]["per_flow"] == pytest.approx(naive0["per_flow"], rel=1e-6)
+    with pytest.raises(ValueError, match="gains=.*allowed"):
+        gain_scan(compose_cfg(SMALL + ["policy=pretrained/ku10", "gains=[-1]"], name="gain_scan"))

@@ -53,7 +53,7 @@ def scalars(run_dir) -> dict[str, list[tuple[int, float]]]:
 
 
 def test_ppo_end_to_end(train_cfg, tmp_path):
-    cfg = train_cfg()
+    cfg = train_cfg("train.compare_baselines=true")
     metrics = train(cfg, tmp_path)
     assert math.isfinite(metrics["R_hat_mean"]) and metrics["R_hat_mean"] > 0
     assert metrics["seed"] == EVAL_SEED_OFFSET and metrics["strategy"] == "policy"
@@ -78,6 +78,12 @@ def test_ppo_end_to_end(train_cfg, tmp_path):
     assert [step for step, _ in s["train/loss_critic"]] == [80, 160, 240, 320]
     assert [step for step, _ in s["eval/R_hat"]] == [0, 160, 320]  # initial policy first
     assert "train/R_hat" in s  # episodes of 20 decisions finish every other batch
+    # train.compare_baselines: STO, naive and the policy on the final evaluation's flows
+    rec = json.loads((tmp_path / "comparison.json").read_text())
+    assert [r["label"] for r in rec["rows"]] == ["sto", "naive(+0.98)", f"policy({tmp_path})"]
+    assert rec["seed"] == metrics["seed"]
+    assert rec["rows"][2]["per_flow"] == metrics["per_flow"]  # same flows, same policy
+    assert (tmp_path / "comparison.md").read_text().startswith("Ku = ")
     lr = [v for _, v in s["train/lr_actor"]]
     lr0 = cfg.optim.lr_actor
     assert lr == pytest.approx([lr0 * (1 - u / 4) for u in range(4)], rel=1e-5)

@@ -14,12 +14,13 @@ Rules for the run directory (checked before any compute):
 
 from __future__ import annotations
 
+import copy
 import json
 import logging
 import shutil
 from pathlib import Path
 
-from omegaconf import DictConfig, OmegaConf
+from omegaconf import DictConfig, OmegaConf, open_dict
 
 from swimrl.builders import setup_runtime
 from swimrl.config import ConfigError
@@ -40,6 +41,7 @@ RESUME_FREE_KEYS = {
     "kernel",
     "policy",
     "train.progress",
+    "train.compare_baselines",
     "train.stop_after_updates",
     "train.checkpoint_every",
     "train.checkpoint_seconds",
@@ -160,7 +162,35 @@ def train(cfg: DictConfig, out: Path) -> dict | None:
     }
     write_metrics(metrics, out, overwrite=bool(cfg.overwrite))
     print(summary_line(metrics), flush=True)
+    if cfg.train.get("compare_baselines", False):
+        compare_with_baselines(cfg, out, plan.eval_seed)
     return metrics
+
+
+def compare_with_baselines(cfg: DictConfig, out: Path, seed: int) -> dict:
+    """STO, naive (``Lambda = 0.98``) and the trained policy on the same held-out flows.
+
+    Exactly ``swimrl-compare 'compare.strategies=[sto,naive,policy]' compare.policies=[out]
+    seed=<eval seed>`` with the run's final-evaluation sizes; writes ``comparison.json`` and
+    ``comparison.md`` into the run directory and prints the table (ratios to STO, paired).
+    """
+    from swimrl.compare import compare, markdown_table
+
+    c = copy.deepcopy(cfg)
+    with open_dict(c):
+        c.seed = int(seed)
+        c.compare = {"strategies": ["sto", "naive", "policy"], "naive_shape_factors": [0.98],
+                     "policies": [str(out)], "minimal": {"c1": 1.0, "c2": 0.0, "c3": 0.0,
+                                                         "c4": 0.0}}
+    record = compare(c)
+    target = Path(out) / "comparison.json"
+    tmp = target.with_suffix(".json.tmp")
+    tmp.write_text(json.dumps(record, indent=2))
+    tmp.replace(target)
+    table = markdown_table(record)
+    (Path(out) / "comparison.md").write_text(table)
+    print(table, flush=True)
+    return record
 
 
 def read_metrics(out: Path) -> dict:

@@ -98,8 +98,9 @@ def run_dns(cfg: DictConfig) -> Path:
     path = Path(hydra.utils.to_absolute_path(str(cfg.store.path)))
     path.parent.mkdir(parents=True, exist_ok=True)
     attrs = run_attrs(cfg, params)
+    extend_to = int(cfg.store.n_times) if cfg.store.get("extend", False) else None
     writer, resumed = open_run_store(path, attrs, RESUME_KEYS, bool(cfg.store.overwrite),
-                                     int(cfg.store.chunk_times))
+                                     int(cfg.store.chunk_times), extend_to=extend_to)
     dns = DNS(params, batch=1, seeds=[int(cfg.seed)])
     dns.state = _initial_state(cfg, dns)
     prog: dict[str, Any] = dict(writer.attrs)

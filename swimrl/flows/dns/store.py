@@ -201,12 +201,15 @@ class DNSStoreWriter:
 
 
 def open_run_store(path: str | Path, attrs: dict[str, Any], compare_keys: tuple[str, ...],
-                   overwrite: bool = False, chunk_times: int = 1) -> tuple[DNSStoreWriter, bool]:
+                   overwrite: bool = False, chunk_times: int = 1,
+                   extend_to: int | None = None) -> tuple[DNSStoreWriter, bool]:
     """Create or resume the store at ``path``; returns ``(writer, resumed)``.
 
     * no store: create it;
     * finished store (``status == "complete"``): :class:`FileExistsError` unless ``overwrite``
-      (then it is deleted and recreated);
+      (then it is deleted and recreated) or ``extend_to`` exceeds its number of snapshots
+      (then it is resumed from its final checkpoint and more snapshots are appended: the
+      continuation of the same realisation, bit-for-bit what a longer run would have stored);
     * anything else at ``path`` that is not a swimrl DNS store: :class:`FileExistsError`, even
       with ``overwrite`` (it is never deleted);
     * unfinished store: resume if ``attrs[k]`` equals the stored value for every ``k`` in
@@ -223,10 +226,16 @@ def open_run_store(path: str | Path, attrs: dict[str, Any], compare_keys: tuple[
         status = None
     if status is None:
         return DNSStoreWriter.create(path, attrs, chunk_times), False
-    if status == "complete":
-        raise FileExistsError(f"{path} holds a finished DNS store; set overwrite=true to replace it"
-                              " or choose another path")
     writer = DNSStoreWriter(path)
+    if status == "complete":
+        n_have = int(writer.attrs.get("n_written", 0))
+        if extend_to is None:
+            raise FileExistsError(f"{path} holds a finished DNS store; set overwrite=true to "
+                                  "replace it, store.extend=true with store.n_times > "
+                                  f"{n_have} to append to it, or choose another path")
+        if int(extend_to) <= n_have:
+            raise ValueError(f"store.extend=true needs store.n_times > {n_have} (the snapshots "
+                             f"already in {path}), got {extend_to}")
     stored = writer.attrs
     for k in compare_keys:
         if not _same(stored.get(k), attrs.get(k)):
