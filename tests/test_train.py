@@ -322,3 +322,27 @@ def test_slurm_launcher_preset_composes():
     assert (cfg.optim.lr_actor, cfg.optim.lr_critic) == (4e-4, 8e-5)
     plan = validate_train_cfg(cfg)
     assert plan.n_updates == 20000 and plan.gradient_steps_per_update == 800
+
+
+def test_training_in_a_stored_dns_run(compose_cfg, tmp_path):
+    """``swimrl-train flow=dns_replay``: PPO on a (tiny) stored DNS run, swimmers in its units."""
+    from hydra import compose, initialize_config_dir
+
+    from swimrl.flows.dns import DNSStore
+    from swimrl.flows.dns.cli import CONF_DIR, run_dns
+
+    store = tmp_path / "run.zarr"
+    with initialize_config_dir(config_dir=CONF_DIR, version_base="1.3"):
+        dns_cfg = compose(config_name="dns", overrides=[
+            "dns.n=32", "dns.nu=5e-3", "dns.dt=4e-3", "spinup.time=0.2",
+            "spinup.measure_time=0.1", "store.n_times=40", "store.diag_every=5",
+            "progress=false", "threads=1", f"store.path={store}"])
+    run_dns(dns_cfg)
+    s = DNSStore(store)
+    tiny = [o for o in TINY if not o.startswith("flow.")]
+    cfg = compose_cfg(tiny + ["flow=dns_replay", f"flow.path={store}", "train.eval_every=0"],
+                      name="train")
+    metrics = train(cfg, tmp_path / "run")
+    assert math.isfinite(metrics["R_hat_mean"]) and metrics["training"]["frames"] == 320
+    assert metrics["flow_stats"]["u_rms"] > 0 and s.n_times == 40
+    assert metrics["config"]["flow"]["name"] == "dns_replay"
