@@ -87,11 +87,23 @@ def compare(cfg: DictConfig) -> dict:
             actors.append(load_actor(c, params))
         cfgs.append(c)
     results = []
-    for (label, _, _), c, actor in zip(variants, cfgs, actors, strict=True):
-        m = evaluate(c, actor=actor)
-        m["label"] = label
-        print(summary_line(m), flush=True)
-        results.append(m)
+    if cfg.compare.get("shared_flows", False):
+        from swimrl.shared_eval import evaluate_shared
+        from swimrl.strategies import build_strategy
+
+        shared = [a if a is not None else build_strategy(c.strategy, float(
+            c.episode.shape_factor_max)) for a, c in zip(actors, cfgs, strict=True)]
+        for (label, strat, _), m in zip(variants, evaluate_shared(cfg, shared), strict=True):
+            m.update(label=label, strategy=strat.name)
+            print(f"{label}: R_hat = {m['R_hat_mean']:.4f} +- {m['R_hat_sem']:.4f} (shared flows)",
+                  flush=True)
+            results.append(m)
+    else:
+        for (label, _, _), c, actor in zip(variants, cfgs, actors, strict=True):
+            m = evaluate(c, actor=actor)
+            m["label"] = label
+            print(summary_line(m), flush=True)
+            results.append(m)
     ref = np.asarray(results[0]["per_flow"])
     rows = []
     for m in results:
@@ -115,6 +127,7 @@ def compare(cfg: DictConfig) -> dict:
         )
     first = results[0]
     return {
+        "shared_flows": bool(cfg.compare.get("shared_flows", False)),
         "rows": rows,
         "n_flows": first["n_flows"],
         "n_swimmers": first["n_swimmers"],

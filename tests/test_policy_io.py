@@ -138,6 +138,11 @@ def test_compare_pairs_policies_with_the_baselines(pretrained, compose_cfg):
     assert rec["rows"][0]["per_flow"] == sto["per_flow"]
     ratio = sum(alone["per_flow"]) / sum(sto["per_flow"])
     assert rec["rows"][1]["ratio_to_first"] == pytest.approx(ratio, rel=1e-12)
+    shared = compare(compose_cfg(SMALL + size + [
+        "compare.strategies=[sto,policy]", "compare.policies=[pretrained/ku10,pretrained/ku1e7]",
+        "compare.shared_flows=true"], name="compare"))
+    assert [r["label"] for r in shared["rows"]] == [r["label"] for r in rec["rows"]]
+    assert shared["rows"][1]["per_flow"] != shared["rows"][2]["per_flow"]
     for bad, match in ((["compare.policies=[]"], "compare.policies is empty"),
                        (["compare.policies=[pretrained/nope]"], "nope")):
         with pytest.raises((ValueError, FileNotFoundError), match=match):
