@@ -46,8 +46,12 @@ def paired_ratio(a: np.ndarray, b: np.ndarray) -> tuple[float, float]:
     return r, sem
 
 
-def summarise(rec: dict) -> dict:
-    """Per-Ku summary: baselines, smart seeds, paired ratios and their mean/std over seeds."""
+def summarise(rec: dict, exclude: tuple[str, ...] = ()) -> dict:
+    """Per-Ku summary: baselines, smart seeds, paired ratios and their mean/std over seeds.
+
+    Every ``policy(...)`` row counts as one seed of the smart strategy, except rows whose
+    label contains one of the ``exclude`` substrings (e.g. extra policies in the comparison).
+    """
     rows = {r["label"]: r for r in rec["rows"]}
     if "sto" not in rows or "naive(+0.98)" not in rows:
         raise ValueError(f"{rec['_path']}: needs the rows 'sto' and 'naive(+0.98)'")
@@ -56,7 +60,7 @@ def summarise(rec: dict) -> dict:
     best = naive if naive.mean() > sto.mean() else sto
     seeds = []
     for label, r in rows.items():
-        if not label.startswith("policy("):
+        if not label.startswith("policy(") or any(x in label for x in exclude):
             continue
         per = np.asarray(r["per_flow"])
         seeds.append({"label": label, "R_hat_mean": r["R_hat_mean"], "R_hat_sem": r["R_hat_sem"],
@@ -134,8 +138,10 @@ def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("paths", nargs="+", type=Path, help="comparison.json files or directories")
     ap.add_argument("--out", type=Path, default=None, help="PNG path (default: no plot)")
+    ap.add_argument("--exclude", action="append", default=[],
+                    help="leave out policy rows whose label contains this (repeatable)")
     args = ap.parse_args(argv)
-    summaries = [summarise(r) for r in load(args.paths)]
+    summaries = [summarise(r, tuple(args.exclude)) for r in load(args.paths)]
     print(markdown(summaries))
     if args.out is not None:
         plot(summaries, args.out)

@@ -50,5 +50,6 @@ def test_summary_table_and_plot(tmp_path):
     assert "| 1e+07 |" in table and "| 0.1 |" in table and "naive |" in table
     png = tmp_path / "perf.png"
     assert main([str(tmp_path), "--out", str(png)]) == 0 and png.stat().st_size > 1000
+    assert len(summarise(recs[0.1], exclude=("s1",))["seeds"]) == 1
     with pytest.raises(FileNotFoundError, match="no comparison.json"):
         load([tmp_path / "empty_dir_that_does_not_exist"])
