@@ -19,6 +19,7 @@ import copy
 import json
 import logging
 import math
+from pathlib import Path
 
 import hydra
 import numpy as np
@@ -28,6 +29,13 @@ from swimrl.evaluate import evaluate, load_actor, summary_line, validate_eval_cf
 from swimrl.paths import CONF_DIR, run_dir
 
 log = logging.getLogger(__name__)
+
+
+def paired_ratio(a: np.ndarray, b: np.ndarray) -> tuple[float, float]:
+    """``<a>/<b>`` over paired flows and its delta-method SEM ``std(a - r b) / (sqrt(n) <b>)``."""
+    r = float(a.mean() / b.mean())
+    sem = float((a - r * b).std(ddof=1) / math.sqrt(a.size) / b.mean()) if a.size > 1 else 0.0
+    return r, sem
 
 
 def strategy_variants(cfg: DictConfig) -> list[tuple[str, DictConfig, str | None]]:
@@ -107,19 +115,15 @@ def compare(cfg: DictConfig) -> dict:
     ref = np.asarray(results[0]["per_flow"])
     rows = []
     for m in results:
-        per = np.asarray(m["per_flow"])
-        ratio = per.mean() / ref.mean()
-        # delta method for a ratio of paired means: var(A - r B) / (n <B>^2)
-        resid = per - ratio * ref
-        ratio_sem = resid.std(ddof=1) / math.sqrt(per.size) / ref.mean() if per.size > 1 else 0.0
+        ratio, ratio_sem = paired_ratio(np.asarray(m["per_flow"]), ref)
         rows.append(
             {
                 "label": m["label"],
                 "R_hat_mean": m["R_hat_mean"],
                 "R_hat_sem": m["R_hat_sem"],
                 "R_hat_std": m["R_hat_std"],
-                "ratio_to_first": float(ratio),
-                "ratio_sem": float(ratio_sem),
+                "ratio_to_first": ratio,
+                "ratio_sem": ratio_sem,
                 "per_flow": m["per_flow"],
                 "swimmer_substeps_per_s": m["swimmer_substeps_per_s"],
                 "wall_s": m["wall_s"],
@@ -202,15 +206,21 @@ def _main(cfg: DictConfig) -> dict:
     if target.exists() and not cfg.overwrite:
         raise FileExistsError(f"{target} exists; pass overwrite=true to replace it")
     record = compare(cfg)
+    write_comparison(record, out)
+    plot_scan(record, out / "naive_scan.png")
+    log.info("wrote %s", target)
+    return record
+
+
+def write_comparison(record: dict, out: Path) -> None:
+    """``comparison.json`` (atomic replace) and ``comparison.md`` in ``out``; prints the table."""
+    target = Path(out) / "comparison.json"
     tmp = target.with_suffix(".json.tmp")
     tmp.write_text(json.dumps(record, indent=2))
     tmp.replace(target)
     table = markdown_table(record)
-    (out / "comparison.md").write_text(table)
-    plot_scan(record, out / "naive_scan.png")
-    print(table)
-    log.info("wrote %s", target)
-    return record
+    (Path(out) / "comparison.md").write_text(table)
+    print(table, flush=True)
 
 
 @hydra.main(config_path=str(CONF_DIR), config_name="compare", version_base="1.3")

@@ -103,26 +103,35 @@ def evaluate(cfg: DictConfig, actor=None, seed: int | None = None) -> dict:
         per_flow.extend(r_hat.double().mean(dim=1).cpu().tolist())
     bar.close()
     wall = time.perf_counter() - t_start
-    arr = np.asarray(per_flow)
-    std = float(arr.std(ddof=1)) if arr.size > 1 else 0.0
     substeps = n_flows * n_swimmers * params.n_decisions * params.n_substeps
     return {
         "strategy": cfg.strategy.name,
-        "R_hat_mean": float(arr.mean()),
-        "R_hat_std": std,
-        "R_hat_sem": std / math.sqrt(arr.size),
-        "per_flow": per_flow,
+        **flow_statistics(per_flow),
         "n_flows": n_flows,
         "n_swimmers": n_swimmers,
         "seed": seed,
-        "flow_stats": {
-            "u_rms": float(np.mean([s["u_rms"] for s in stats])),
-            "tau_K": float(np.mean([s["tau_K"] for s in stats])),
-            "note": "grid averages at the end of each episode, averaged over flow chunks",
-        },
+        "flow_stats": mean_flow_stats(stats, "averaged over flow chunks"),
         "wall_s": wall,
         "swimmer_substeps_per_s": substeps / sim_s,
         "config": OmegaConf.to_container(cfg, resolve=True),
+    }
+
+
+def flow_statistics(per_flow: list[float]) -> dict:
+    """``R_hat_mean``, ``R_hat_std`` (over flows, ``ddof = 1``), ``R_hat_sem = std / sqrt(n)``
+    and ``per_flow`` from the per-flow means of ``R_hat``."""
+    arr = np.asarray(per_flow)
+    std = float(arr.std(ddof=1)) if arr.size > 1 else 0.0
+    return {"R_hat_mean": float(arr.mean()), "R_hat_std": std,
+            "R_hat_sem": std / math.sqrt(arr.size), "per_flow": list(per_flow)}
+
+
+def mean_flow_stats(stats: list[dict], how: str) -> dict:
+    """Mean of the flows' ``measured_stats()`` (``u_rms``, ``tau_K``) over environments."""
+    return {
+        "u_rms": float(np.mean([s["u_rms"] for s in stats])),
+        "tau_K": float(np.mean([s["tau_K"] for s in stats])),
+        "note": f"grid averages at the end of each episode, {how}",
     }
 
 

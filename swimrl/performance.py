@@ -22,6 +22,8 @@ from pathlib import Path
 
 import numpy as np
 
+from swimrl.compare import paired_ratio
+
 
 def load(paths: list[Path]) -> list[dict]:
     """``comparison.json`` records (files, or directories searched recursively), sorted by Ku."""
@@ -37,13 +39,6 @@ def load(paths: list[Path]) -> list[dict]:
     for f, r in zip(files, recs, strict=True):
         r["_path"] = str(f)
     return sorted(recs, key=lambda r: float(r["config"]["flow"].get("kubo", math.inf)))
-
-
-def paired_ratio(a: np.ndarray, b: np.ndarray) -> tuple[float, float]:
-    """``<a>/<b>`` over paired flows and its delta-method SEM ``std(a - r b) / (sqrt(n) <b>)``."""
-    r = float(a.mean() / b.mean())
-    sem = float((a - r * b).std(ddof=1) / math.sqrt(a.size) / b.mean()) if a.size > 1 else 0.0
-    return r, sem
 
 
 def summarise(rec: dict, exclude: tuple[str, ...] = ()) -> dict:

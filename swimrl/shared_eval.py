@@ -14,17 +14,21 @@ per flow, exactly what the ratio's delta-method SEM uses.
 
 from __future__ import annotations
 
-import math
 import time
 
-import numpy as np
 import torch
 from omegaconf import DictConfig
 from tensordict import TensorDictBase
 from torch import nn
 
 from swimrl.builders import build_env, setup_runtime
-from swimrl.evaluate import chunk_seed, validate_eval_cfg
+from swimrl.evaluate import (
+    chunk_seed,
+    flow_statistics,
+    mean_flow_stats,
+    run_episodes,
+    validate_eval_cfg,
+)
 
 
 class SplitActor(nn.Module):
@@ -58,25 +62,13 @@ def evaluate_shared(cfg: DictConfig, actors: list, seed: int | None = None) -> l
     for c, i in enumerate(range(0, n_flows, per_batch)):
         env = build_env(cfg, min(per_batch, n_flows - i), k * s, chunk_seed(seed, c), device,
                         dtype)
-        td = env.reset()
-        for _ in range(params.n_decisions):
-            td = env.step(router(td)).get("next")
-        r_hat = (td.get("distance").squeeze(-1) / env.reference_distance).double()
+        r_hat = run_episodes(env, router).double()
         stats.append(env.flow.measured_stats())
         for j in range(k):
             per_flow[j].extend(r_hat[:, j * s:(j + 1) * s].mean(dim=1).cpu().tolist())
     wall = time.perf_counter() - t0
-    out = []
-    for j in range(k):
-        arr = np.asarray(per_flow[j])
-        std = float(arr.std(ddof=1)) if arr.size > 1 else 0.0
-        out.append({"R_hat_mean": float(arr.mean()), "R_hat_std": std,
-                    "R_hat_sem": std / math.sqrt(arr.size), "per_flow": per_flow[j],
-                    "n_flows": n_flows, "n_swimmers": s, "seed": seed, "wall_s": wall,
-                    "flow_stats": {
-                        "u_rms": float(np.mean([x["u_rms"] for x in stats])),
-                        "tau_K": float(np.mean([x["tau_K"] for x in stats])),
-                        "note": "grid averages at the end of each episode, shared flows"},
-                    "swimmer_substeps_per_s": n_flows * k * s * params.n_decisions
-                    * params.n_substeps / wall})
-    return out
+    substeps_per_s = n_flows * k * s * params.n_decisions * params.n_substeps / wall
+    flow_stats = mean_flow_stats(stats, "shared flows")
+    return [{**flow_statistics(per_flow[j]), "n_flows": n_flows, "n_swimmers": s, "seed": seed,
+             "wall_s": wall, "flow_stats": flow_stats, "swimmer_substeps_per_s": substeps_per_s}
+            for j in range(k)]

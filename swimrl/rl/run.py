@@ -174,7 +174,7 @@ def compare_with_baselines(cfg: DictConfig, out: Path, seed: int) -> dict:
     seed=<eval seed>`` with the run's final-evaluation sizes; writes ``comparison.json`` and
     ``comparison.md`` into the run directory and prints the table (ratios to STO, paired).
     """
-    from swimrl.compare import compare, markdown_table
+    from swimrl.compare import compare, write_comparison
 
     c = copy.deepcopy(cfg)
     with open_dict(c):
@@ -183,13 +183,7 @@ def compare_with_baselines(cfg: DictConfig, out: Path, seed: int) -> dict:
                      "policies": [str(out)], "minimal": {"c1": 1.0, "c2": 0.0, "c3": 0.0,
                                                          "c4": 0.0}}
     record = compare(c)
-    target = Path(out) / "comparison.json"
-    tmp = target.with_suffix(".json.tmp")
-    tmp.write_text(json.dumps(record, indent=2))
-    tmp.replace(target)
-    table = markdown_table(record)
-    (Path(out) / "comparison.md").write_text(table)
-    print(table, flush=True)
+    write_comparison(record, Path(out))
     return record
 
 
