@@ -96,6 +96,8 @@ class DNS:
 
     ``forcing``: ``None`` builds a :class:`StochasticForcing` with ``seeds`` (default
     ``0..B-1``) when ``epsilon > 0``; pass a :class:`SteadyForcing` for a deterministic one.
+    ``advection_form``: ``"basdevant"`` (4 FFTs per evaluation, default) or ``"divergence"``
+    (5 FFTs), see :class:`Advection`.
     After each step :attr:`last_forcing` holds the ``f_hat`` used during that step.
     """
 
@@ -106,6 +108,7 @@ class DNS:
         seeds: Sequence[int] | None = None,
         state: DNSState | None = None,
         forcing: StochasticForcing | SteadyForcing | None = None,
+        advection_form: str = "basdevant",
     ):
         self.params = params
         self.grid = SpectralGrid(params.n, params.length, params.device, params.torch_dtype)
@@ -116,7 +119,7 @@ class DNS:
         if len(seeds) != batch:
             raise ValueError(f"len(seeds)={len(seeds)} must equal the batch size {batch}")
         self.seeds = [int(s) for s in seeds]
-        self.advection = Advection(self.grid)
+        self.advection = Advection(self.grid, advection_form)
         self.linear = linear_operator(self.grid, params)
         self.stepper = ETDRK4(self.linear, params.dt, self.grid)
         if forcing is None and params.epsilon > 0:
