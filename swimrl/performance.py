@@ -133,11 +133,17 @@ def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("paths", nargs="+", type=Path, help="comparison.json files or directories")
     ap.add_argument("--out", type=Path, default=None, help="PNG path (default: no plot)")
+    ap.add_argument("--md", type=Path, default=None, help="also write the table to this file")
     ap.add_argument("--exclude", action="append", default=[],
                     help="leave out policy rows whose label contains this (repeatable)")
     args = ap.parse_args(argv)
     summaries = [summarise(r, tuple(args.exclude)) for r in load(args.paths)]
-    print(markdown(summaries))
+    table = markdown(summaries)
+    print(table)
+    if args.md is not None:
+        args.md.parent.mkdir(parents=True, exist_ok=True)
+        args.md.write_text(table + "\n")
+        print(f"wrote {args.md}")
     if args.out is not None:
         plot(summaries, args.out)
         print(f"wrote {args.out}")

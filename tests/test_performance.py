@@ -49,7 +49,9 @@ def test_summary_table_and_plot(tmp_path):
     table = markdown(s)
     assert "| 1e+07 |" in table and "| 0.1 |" in table and "naive |" in table
     png = tmp_path / "perf.png"
-    assert main([str(tmp_path), "--out", str(png)]) == 0 and png.stat().st_size > 1000
+    md = tmp_path / "out" / "table.md"
+    assert main([str(tmp_path), "--out", str(png), "--md", str(md)]) == 0
+    assert png.stat().st_size > 1000 and md.read_text().strip() == table.strip()
     assert len(summarise(recs[0.1], exclude=("s1",))["seeds"]) == 1
     with pytest.raises(FileNotFoundError, match="no comparison.json"):
         load([tmp_path / "empty_dir_that_does_not_exist"])

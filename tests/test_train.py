@@ -324,6 +324,24 @@ def test_slurm_launcher_preset_composes():
     assert plan.n_updates == 20000 and plan.gradient_steps_per_update == 800
 
 
+def test_bigbatch_preset_extends_default():
+    """``train_preset=bigbatch``: the default preset's loss and learning rates, 64 flows."""
+    from hydra import compose, initialize_config_dir
+
+    from swimrl.paths import CONF_DIR
+
+    with initialize_config_dir(config_dir=str(CONF_DIR), version_base="1.3"):
+        default = compose("train")
+        big = compose("train", overrides=["train_preset=bigbatch", "train.total_frames=1e7"])
+    assert (big.train.n_flows, big.train.n_swimmers) == (64, 8)
+    assert big.train.frames_per_batch == 64 * 8 * 100 and big.train.minibatch_size == 2560
+    for key in ("optim.lr_actor", "optim.lr_critic", "loss.entropy_coeff", "loss.gae_lambda"):
+        sect, k = key.split(".")
+        assert big[sect][k] == default[sect][k], key
+    plan = validate_train_cfg(big)
+    assert plan.n_updates == 10_000_000 // 51200 and plan.gradient_steps_per_update == 80
+
+
 def test_training_in_a_stored_dns_run(compose_cfg, tmp_path):
     """``swimrl-train flow=dns_replay``: PPO on a (tiny) stored DNS run, swimmers in its units."""
     from hydra import compose, initialize_config_dir
