@@ -15,8 +15,7 @@ import time
 
 import torch
 
-from swimrl.config import EnvParams
-from swimrl.env import SwimmerEnv
+from swimrl.env import EnvParams, SwimmerEnv
 from swimrl.flows.stochastic import StochasticFlow
 
 DEFAULT_BATCHES = ["1x1000", "10x100", "10x1000", "100x100", "1x10000", "10x10000", "1x100000"]

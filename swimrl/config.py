@@ -1,150 +1,261 @@
-"""Validated physical and episode parameters, built from the Hydra config before any compute.
+"""The only module that reads a Hydra config: each command's ``DictConfig`` -> typed objects.
 
-All times in the config are in units of ``tau_K`` and speeds in units of ``u_rms`` of the
-flow in use; :class:`EnvParams` keeps them dimensionless and the environment converts with
-the flow's own ``tau_K`` and ``u_rms``.
+Every ``*_config`` function maps the config keys onto the typed objects of the library
+(:class:`~swimrl.env.EnvParams`, :class:`~swimrl.flows.build.StochasticSpec`,
+:class:`~swimrl.rl.plan.TrainSettings`, ...), whose constructors check every value and raise
+one :class:`~swimrl.errors.ConfigError` naming the key, the value and the allowed range. A
+command therefore validates its whole config once, before any compute, and the library
+never sees a ``DictConfig``. ``record`` (the resolved config as plain containers) goes into
+the result files.
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+import dataclasses
+import math
 from pathlib import Path
 
-import torch
+from omegaconf import DictConfig, OmegaConf
 
-from swimrl.signals import SIGNAL_NAMES, signal_indices
-
-SHAPE_FACTOR_LIMIT = 1.0
-STRATEGIES = ("naive", "sto", "minimal", "policy")
-FLOWS = ("stochastic", "dns_replay", "dns")
-
-
-class ConfigError(ValueError):
-    """A config value outside its allowed range (message names key, value and range)."""
-
-
-def _check(cond: bool, key: str, value, allowed: str) -> None:
-    if not cond:
-        raise ConfigError(f"{key}={value!r} is invalid: allowed {allowed}")
-
-
-def _ratio(num: float, den: float, key: str, what: str) -> int:
-    """Integer ``num/den``, or a ConfigError naming ``key``."""
-    r = num / den
-    k = round(r)
-    if k < 1 or abs(r - k) > 1e-6 * max(1.0, r):
-        raise ConfigError(f"{key}: {what} = {r:.6g} must be a positive integer")
-    return k
+from swimrl.analysis.fit_minimal import FitConfig
+from swimrl.analysis.gain_scan import GainScanConfig
+from swimrl.env import EnvParams
+from swimrl.errors import as_bool, as_int, one_of
+from swimrl.evaluation.compare import CompareConfig, strategy_variants
+from swimrl.evaluation.rollout import EvalConfig, EvalSetup, EvalSizes
+from swimrl.flows.build import (
+    FLOWS,
+    FlowSpec,
+    LiveDNSSpec,
+    StochasticSpec,
+    StoredRunSpec,
+    live_dns_params,
+)
+from swimrl.flows.dns.params import DNSParams
+from swimrl.flows.dns.run import DNSRun
+from swimrl.policies.baselines import StrategySpec
+from swimrl.policies.networks import ModelSpec
+from swimrl.rl.plan import LossSettings, OptimSettings, TrainConfig, TrainSettings
+from swimrl.runtime import Runtime
 
 
-@dataclass(frozen=True)
-class EnvParams:
-    """Swimmer and episode parameters (dimensionless: times / tau_K, speeds / u_rms)."""
-
-    swim_speed: float = 0.707
-    rot_diffusion: float = 0.0
-    duration: float = 200.0
-    update_interval: float = 0.1
-    dt: float = 0.01
-    shape_factor_max: float = 0.98
-    signals: tuple[str, ...] = SIGNAL_NAMES
-    n_substeps: int = field(init=False)
-    n_decisions: int = field(init=False)
-
-    def __post_init__(self) -> None:
-        _check(self.swim_speed >= 0, "swimmer.swim_speed", self.swim_speed, ">= 0 (units u_rms)")
-        _check(self.rot_diffusion >= 0, "swimmer.rot_diffusion", self.rot_diffusion, ">= 0")
-        _check(self.dt > 0, "episode.dt", self.dt, "> 0 (units tau_K)")
-        _check(self.update_interval > 0, "episode.update_interval", self.update_interval, "> 0")
-        _check(
-            self.update_interval <= self.duration,
-            "episode.update_interval",
-            self.update_interval,
-            f"<= episode.duration={self.duration}",
-        )
-        _check(
-            0 < self.shape_factor_max < SHAPE_FACTOR_LIMIT,
-            "episode.shape_factor_max",
-            self.shape_factor_max,
-            "in (0, 1)",
-        )
-        signal_indices(self.signals)
-        object.__setattr__(
-            self,
-            "n_substeps",
-            _ratio(self.update_interval, self.dt, "episode.dt", "update_interval/dt"),
-        )
-        object.__setattr__(
-            self,
-            "n_decisions",
-            _ratio(
-                self.duration,
-                self.update_interval,
-                "episode.update_interval",
-                "duration/update_interval",
-            ),
-        )
-
-    @classmethod
-    def from_cfg(cls, cfg) -> EnvParams:
-        """Build from the ``swimmer``, ``episode`` and ``signals`` config groups."""
-        return cls(
-            swim_speed=float(cfg.swimmer.swim_speed),
-            rot_diffusion=float(cfg.swimmer.rot_diffusion),
-            duration=float(cfg.episode.duration),
-            update_interval=float(cfg.episode.update_interval),
-            dt=float(cfg.episode.dt),
-            shape_factor_max=float(cfg.episode.shape_factor_max),
-            signals=tuple(cfg.signals.names),
-        )
+def flow_tag(flow: DictConfig) -> str:
+    """Run-directory tag of a flow: ``ku10.0`` for the stochastic flow, else its name."""
+    return f"ku{flow.kubo}" if flow.name == "stochastic" else str(flow.name)
 
 
-def resolve_device(device: str) -> torch.device:
-    """``cpu``, ``cuda`` or ``cuda:N``; a clear error if CUDA is asked for but absent."""
+OmegaConf.register_new_resolver("flow_tag", flow_tag, replace=True)
+
+
+def _int(value):
+    """``value`` as an int when it is a whole number (else unchanged, for the check to name)."""
+    if isinstance(value, bool):
+        return value
     try:
-        dev = torch.device(device)
-    except RuntimeError:
-        dev = None
-    if dev is None or dev.type not in ("cpu", "cuda"):
-        raise ConfigError(f"device={device!r} is invalid: allowed 'cpu', 'cuda', 'cuda:N'")
-    if dev.type == "cuda" and not torch.cuda.is_available():
-        raise ConfigError(f"device={device!r} is invalid: CUDA is not available on this machine")
-    return dev
+        f = float(value)
+    except (TypeError, ValueError):
+        return value
+    return int(f) if math.isfinite(f) and f == int(f) else value
 
 
-def resolve_dtype(name: str) -> torch.dtype:
-    """``float32`` (default) or ``float64``."""
-    table = {"float32": torch.float32, "float64": torch.float64}
-    _check(name in table, "dtype", name, "'float32' or 'float64'")
-    return table[name]
+def _float(value):
+    """``value`` as a float when it is a number (else unchanged, for the check to name)."""
+    if isinstance(value, bool):
+        return value
+    try:
+        return float(value)
+    except (TypeError, ValueError):
+        return value
 
 
-def validate_flow_cfg(flow) -> None:
-    """Checks of the ``flow`` group common to all backends (more checks in each backend)."""
-    _check(flow.name in FLOWS, "flow.name", flow.name, f"one of {list(FLOWS)}")
+def _optional(value, convert):
+    return None if value is None else convert(value)
+
+
+def record_of(cfg: DictConfig) -> dict:
+    """The resolved config as plain containers (written into result files), without the
+    ``hydra`` node a composed config may carry."""
+    keys = [k for k in cfg if k != "hydra"]
+    return OmegaConf.to_container(OmegaConf.masked_copy(cfg, keys), resolve=True)
+
+
+def runtime(cfg: DictConfig) -> Runtime:
+    """``device``, ``dtype``, ``threads``, ``kernel``."""
+    return Runtime.from_names(
+        cfg.device, cfg.dtype, _optional(cfg.get("threads"), _int), cfg.get("kernel", "auto")
+    )
+
+
+def env_params(cfg: DictConfig) -> EnvParams:
+    """``swimmer.*``, ``episode.*`` and ``signals.names``."""
+    return EnvParams(
+        swim_speed=_float(cfg.swimmer.swim_speed),
+        rot_diffusion=_float(cfg.swimmer.rot_diffusion),
+        duration=_float(cfg.episode.duration),
+        update_interval=_float(cfg.episode.update_interval),
+        dt=_float(cfg.episode.dt),
+        shape_factor_max=_float(cfg.swimmer.shape_factor_max),
+        signals=tuple(cfg.signals.names),
+    )
+
+
+def flow_spec(flow: DictConfig, rt: Runtime) -> FlowSpec:
+    """The ``flow`` group (``flow=stochastic | dns_replay | dns``)."""
+    one_of("flow.name", flow.name, FLOWS)
     if flow.name == "stochastic":
-        _check(float(flow.kubo) > 0, "flow.kubo", flow.kubo, "> 0 (e.g. 0.1, 1, 10, 1e7)")
-        _check(int(flow.n_modes) >= 1, "flow.n_modes", flow.n_modes, "integer >= 1")
-        n = int(flow.n_grid)
-        _check(n >= 4 and n % 2 == 0, "flow.n_grid", flow.n_grid, "even integer >= 4")
-        _check(float(flow.spacing) > 0, "flow.spacing", flow.spacing, "> 0 (units ell_f)")
-    if flow.name == "dns":
-        from swimrl.flows.dns import DNSParams
-
-        DNSParams.from_mapping(dict(flow.dns))  # raises DNSParamError naming the key
-        for key in ("spinup_time", "measure_time", "snapshot_tau_k"):
-            _check(float(flow[key]) > 0, f"flow.{key}", flow[key], "> 0")
-        _check(
-            float(flow.measure_time) <= float(flow.spinup_time),
-            "flow.measure_time",
-            flow.measure_time,
-            f"<= flow.spinup_time={flow.spinup_time}",
+        return StochasticSpec(
+            kubo=_float(flow.kubo),
+            n_modes=_int(flow.n_modes),
+            n_grid=_int(flow.n_grid),
+            spacing=_float(flow.spacing),
         )
     if flow.name == "dns_replay":
-        path = Path(str(flow.path))
-        _check(
-            (path / "zarr.json").exists() or (path / ".zgroup").exists(),
-            "flow.path",
-            str(flow.path),
-            "a DNS store made by swimrl-dns (see docs/dns.md)",
-        )
+        return StoredRunSpec(Path(str(flow.path)))
+    return LiveDNSSpec(
+        dns=live_dns_params(OmegaConf.to_container(flow.dns), rt.device, rt.dtype),
+        spinup_time=_float(flow.spinup.time),
+        measure_time=_float(flow.spinup.measure_time),
+        interval_tau_k=_float(flow.interval_tau_k),
+    )
+
+
+def eval_sizes(node: DictConfig) -> EvalSizes:
+    """``eval.*``."""
+    return EvalSizes(
+        n_flows=_int(node.n_flows),
+        n_swimmers=_int(node.n_swimmers),
+        flows_per_batch=_int(node.flows_per_batch),
+        progress=as_bool("eval.progress", node.progress),
+    )
+
+
+def eval_setup(cfg: DictConfig) -> EvalSetup:
+    """Physics, flow, runtime, evaluation sizes and seed of any evaluating command."""
+    params = env_params(cfg)
+    rt = runtime(cfg)
+    return EvalSetup(
+        flow=flow_spec(cfg.flow, rt),
+        params=params,
+        runtime=rt,
+        sizes=eval_sizes(cfg.eval),
+        seed=as_int("seed", cfg.seed, low=0),
+        record=record_of(cfg),
+    )
+
+
+def strategy_spec(node: DictConfig) -> StrategySpec:
+    """The ``strategy`` group."""
+    if node.name == "naive":
+        return StrategySpec("naive", shape_factor=_float(node.shape_factor))
+    if node.name == "minimal":
+        return StrategySpec("minimal", coeffs=tuple(_float(node[k]) for k in ("c1", "c2", "c3",
+                                                                               "c4")))
+    return StrategySpec(str(node.name))
+
+
+def eval_config(cfg: DictConfig) -> EvalConfig:
+    """``swimrl-eval`` (``conf/evaluate.yaml``)."""
+    policy = cfg.get("policy")
+    return EvalConfig(
+        setup=eval_setup(cfg),
+        strategy=strategy_spec(cfg.strategy),
+        policy=None if policy is None else str(policy),
+        overwrite=as_bool("overwrite", cfg.overwrite),
+    )
+
+
+def compare_config(cfg: DictConfig) -> CompareConfig:
+    """``swimrl-compare`` and ``swimrl-naive-scan`` (``conf/compare.yaml``)."""
+    setup = eval_setup(cfg)
+    c = cfg.compare
+    minimal = tuple(_float(c.minimal[k]) for k in ("c1", "c2", "c3", "c4"))
+    variants = strategy_variants(
+        list(c.strategies),
+        [_float(x) for x in c.naive_shape_factors],
+        minimal,
+        [str(p) for p in (c.get("policies") or [])],
+    )
+    for v in variants:
+        v.strategy.check_bound(setup.params.shape_factor_max)
+    return CompareConfig(
+        setup=setup,
+        variants=variants,
+        shared_flows=as_bool("compare.shared_flows", c.get("shared_flows", False)),
+        overwrite=as_bool("overwrite", cfg.overwrite),
+    )
+
+
+def fit_config(cfg: DictConfig) -> FitConfig:
+    """``swimrl-fit-minimal`` (``conf/fit_minimal.yaml``)."""
+    return FitConfig(eval=eval_config(cfg), sample_every=_int(cfg.fit.sample_every))
+
+
+def gain_scan_config(cfg: DictConfig) -> GainScanConfig:
+    """``swimrl-gain-scan`` (``conf/gain_scan.yaml``)."""
+    ev = eval_config(cfg)
+    return GainScanConfig(setup=ev.setup, policy=ev.policy,
+                          gains=tuple(_float(g) for g in cfg.gains))
+
+
+def _from_node(cls, node: DictConfig, **given):
+    """Dataclass ``cls`` from the keys of ``node`` with its field names (numbers converted as
+    the field's type says); ``given`` fields are passed as they are."""
+    values = dict(given)
+    for f in dataclasses.fields(cls):
+        if f.init and f.name not in given and f.name in node:
+            v = node[f.name]
+            if v is not None and f.type.startswith(("int", "float")):
+                v = _int(v) if f.type.startswith("int") else _float(v)
+            values[f.name] = v
+    return cls(**values)
+
+
+def train_config(cfg: DictConfig) -> TrainConfig:
+    """``swimrl-train`` (``conf/train.yaml`` and a ``train_preset``)."""
+    t, model = cfg.train, cfg.model
+    reward_scale = None if t.reward_scale in (None, "auto") else _float(t.reward_scale)
+    return TrainConfig(
+        evaluation=eval_setup(cfg),
+        train=_from_node(TrainSettings, t, reward_scale=reward_scale),
+        loss=_from_node(LossSettings, cfg.loss),
+        optim=_from_node(OptimSettings, cfg.optim),
+        model=ModelSpec(
+            hidden=tuple(_int(h) for h in model.hidden),
+            activation=str(model.activation),
+            init_std=_float(model.init_std),
+        ),
+        resume=cfg.resume,
+        overwrite=cfg.overwrite,
+    )
+
+
+def dns_run(cfg: DictConfig) -> DNSRun:
+    """``swimrl-dns`` (``conf/dns.yaml``); a relative ``store.path`` is taken from the launch
+    directory."""
+    from hydra.utils import to_absolute_path
+
+    rt = runtime(cfg)
+    params = DNSParams.from_mapping(
+        {**OmegaConf.to_container(cfg.dns), "device": str(rt.device),
+         "dtype": str(rt.dtype).replace("torch.", "")}
+    )
+    store = cfg.store
+    return DNSRun(
+        params=params,
+        seed=as_int("seed", cfg.seed, low=0),
+        init_kind=str(cfg.init.kind),
+        init_energy=_float(cfg.init.energy),
+        init_k_peak=_float(cfg.init.k_peak),
+        spinup_time=_float(cfg.spinup.time),
+        measure_time=_float(cfg.spinup.measure_time),
+        path=Path(to_absolute_path(str(store.path))),
+        n_times=_int(store.n_times),
+        interval_tau_k=_float(store.interval_tau_k),
+        chunk_times=_int(store.chunk_times),
+        overwrite=as_bool("store.overwrite", store.overwrite),
+        extend=as_bool("store.extend", store.get("extend", False)),
+        checkpoint_seconds=_float(store.checkpoint_seconds),
+        diag_every=_int(store.diag_every),
+        max_steps=_optional(cfg.get("max_steps"), _int),
+        progress=as_bool("progress", cfg.progress),
+    )

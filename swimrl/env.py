@@ -3,7 +3,7 @@ r"""TorchRL environment: batched swimmers in batched flows.
 Batch shape ``(n_flows, n_swimmers)``: swimmer ``(f, s)`` moves in flow realisation ``f``.
 One environment step is one decision interval ``T_u``: the action ``Lambda`` (shape factor,
 bounded to ``[-Lambda_max, Lambda_max]``) is held while the dynamics
-(:mod:`swimrl.swimmer`) is integrated over ``T_u / dt`` Heun steps. Reward (``eq:reward``):
+(:mod:`swimrl.physics.swimmer`) is integrated over ``T_u / dt`` Heun steps. Reward (``eq:reward``):
 
 ``r_i = |x(t_i) - x_0| - |x(t_{i-1}) - x_0|``,
 
@@ -11,7 +11,7 @@ so the undiscounted return telescopes to ``|x(t_N) - x_0|`` (flow length units).
 are truncated after ``N = T / T_u`` decisions. Keys:
 
 * ``observation`` – the configured signal subset (``signals.names``), ``(F, S, k)``;
-* ``signals`` – all five signals in :data:`swimrl.signals.SIGNAL_NAMES` order (baselines);
+* ``signals`` – all five signals in :data:`swimrl.physics.signals.SIGNAL_NAMES` order (baselines);
 * ``distance`` – ``|x - x_0|``, ``(F, S, 1)``;
 * ``action`` – ``Lambda``, ``(F, S, 1)``; ``reward``; ``done``/``terminated``/``truncated``.
 
@@ -25,16 +25,85 @@ grid cell however far the swimmer goes.
 from __future__ import annotations
 
 import math
+from dataclasses import dataclass, field
 
 import torch
 from tensordict import TensorDict, TensorDictBase
 from torchrl.data import Bounded, Categorical, Composite, Unbounded
 from torchrl.envs import EnvBase
 
-from swimrl.config import EnvParams
-from swimrl.flows.fields import GriddedFlow
-from swimrl.integrator import select_kernel
-from swimrl.signals import compute_signals, signal_indices
+from swimrl.errors import ConfigError, require
+from swimrl.flows.base import GriddedFlow
+from swimrl.flows.build import FlowSpec, build_flow
+from swimrl.physics.integrator import select_kernel
+from swimrl.physics.signals import SIGNAL_NAMES, compute_signals, signal_indices
+from swimrl.runtime import Runtime
+
+
+def _ratio(num: float, den: float, key: str, value: float, what: str) -> int:
+    """Integer ``num/den``, or a ConfigError naming ``key``."""
+    r = num / den
+    k = round(r)
+    if k < 1 or abs(r - k) > 1e-6 * max(1.0, r):
+        raise ConfigError(
+            f"{key}={value!r} is invalid: allowed values making {what} (now {r:.6g}) a positive "
+            "integer"
+        )
+    return k
+
+
+@dataclass(frozen=True)
+class EnvParams:
+    """Swimmer and episode parameters (dimensionless: times / tau_K, speeds / u_rms).
+
+    ``shape_factor_max`` (``Lambda_max``) bounds the action: the environment's action spec is
+    ``[-Lambda_max, Lambda_max]``, from which actors and baselines read it.
+    """
+
+    swim_speed: float = 0.707
+    rot_diffusion: float = 0.0
+    duration: float = 200.0
+    update_interval: float = 0.1
+    dt: float = 0.01
+    shape_factor_max: float = 0.98
+    signals: tuple[str, ...] = SIGNAL_NAMES
+    n_substeps: int = field(init=False)
+    n_decisions: int = field(init=False)
+
+    def __post_init__(self) -> None:
+        require(self.swim_speed >= 0, "swimmer.swim_speed", self.swim_speed, ">= 0 (units u_rms)")
+        require(self.rot_diffusion >= 0, "swimmer.rot_diffusion", self.rot_diffusion, ">= 0")
+        require(self.dt > 0, "episode.dt", self.dt, "> 0 (units tau_K)")
+        require(self.update_interval > 0, "episode.update_interval", self.update_interval, "> 0")
+        require(
+            self.update_interval <= self.duration,
+            "episode.update_interval",
+            self.update_interval,
+            f"<= episode.duration={self.duration}",
+        )
+        require(
+            0 < self.shape_factor_max < 1,
+            "swimmer.shape_factor_max",
+            self.shape_factor_max,
+            "in (0, 1)",
+        )
+        signal_indices(self.signals)
+        object.__setattr__(
+            self,
+            "n_substeps",
+            _ratio(self.update_interval, self.dt, "episode.dt", self.dt, "update_interval/dt"),
+        )
+        object.__setattr__(
+            self,
+            "n_decisions",
+            _ratio(
+                self.duration,
+                self.update_interval,
+                "episode.update_interval",
+                self.update_interval,
+                "duration/update_interval",
+            ),
+        )
 
 
 class SwimmerEnv(EnvBase):
@@ -92,6 +161,25 @@ class SwimmerEnv(EnvBase):
             shape=batch,
             device=dev,
         )
+
+    @classmethod
+    def build(
+        cls,
+        flow: FlowSpec,
+        params: EnvParams,
+        runtime: Runtime,
+        n_flows: int,
+        n_swimmers: int,
+        seed: int,
+    ) -> SwimmerEnv:
+        """Environment of ``n_flows x n_swimmers`` swimmers in new realisations of ``flow``;
+        all randomness (flows, initial conditions, noise) from ``seed``."""
+        device, dtype = runtime.device, runtime.dtype
+        gen = torch.Generator(device=device).manual_seed(int(seed))
+        realisations = build_flow(
+            flow, n_flows, device, dtype, gen, params.update_interval, params.duration
+        )
+        return cls(realisations, n_swimmers, params, generator=gen, kernel=runtime.kernel)
 
     # -- state helpers ------------------------------------------------------------------------
     @property

@@ -6,9 +6,7 @@ import os
 
 import pytest
 import torch
-from hydra import compose, initialize_config_dir
-
-from swimrl.paths import CONF_DIR
+from hydra import compose, initialize_config_module
 
 torch.set_num_threads(int(os.environ.get("SWIMRL_TEST_THREADS", "1")))
 
@@ -27,7 +25,7 @@ def compose_cfg():
     """Compose the ``evaluate`` config with overrides, as the CLI would."""
 
     def _compose(overrides=(), name: str = "evaluate"):
-        with initialize_config_dir(config_dir=str(CONF_DIR), version_base="1.3"):
+        with initialize_config_module("swimrl.conf", version_base="1.3"):
             return compose(config_name=name, overrides=list(overrides))
 
     return _compose

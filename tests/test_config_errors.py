@@ -3,13 +3,14 @@
 from __future__ import annotations
 
 import json
+import os
 import subprocess
 import sys
 
 import pytest
 from hydra.errors import ConfigCompositionException
 
-from swimrl.evaluate import evaluate, validate_eval_cfg
+from swimrl.config import eval_config
 
 from .conftest import SMALL
 
@@ -19,8 +20,8 @@ from .conftest import SMALL
     [
         ("flow.kubo=0", "flow.kubo"),
         ("flow.kubo=-1", "flow.kubo"),
-        ("episode.shape_factor_max=1.0", "episode.shape_factor_max"),
-        ("episode.shape_factor_max=1.5", "episode.shape_factor_max"),
+        ("swimmer.shape_factor_max=1.0", "swimmer.shape_factor_max"),
+        ("swimmer.shape_factor_max=1.5", "swimmer.shape_factor_max"),
         ("episode.dt=0.03", "episode.dt"),
         ("episode.update_interval=300", "episode.update_interval"),
         ("episode.duration=0.25", "episode.update_interval"),
@@ -42,23 +43,23 @@ from .conftest import SMALL
 def test_bad_values_name_the_key(compose_cfg, override, key):
     cfg = compose_cfg(SMALL + override.split())
     with pytest.raises(ValueError) as err:
-        evaluate(cfg)
+        eval_config(cfg)
     msg = str(err.value)
     assert key in msg and "\n" not in msg
 
 
 def test_validation_precedes_compute(compose_cfg, monkeypatch):
-    """The flow is never built for an invalid config."""
-    import swimrl.builders as builders
+    """The flow is never built for an invalid config: parsing the config checks it all."""
+    import swimrl.env
 
     def boom(*a, **k):
         raise AssertionError("flow built before validation")
 
-    monkeypatch.setattr(builders, "build_flow", boom)
+    monkeypatch.setattr(swimrl.env, "build_flow", boom)
     with pytest.raises(ValueError, match="episode.dt"):
-        evaluate(compose_cfg(SMALL + ["episode.dt=0.03"]))
+        eval_config(compose_cfg(SMALL + ["episode.dt=0.03"]))
     cfg = compose_cfg(SMALL + ["episode.dt=0.05"])
-    assert validate_eval_cfg(cfg).n_substeps == 2
+    assert eval_config(cfg).setup.params.n_substeps == 2
 
 
 def test_unknown_strategy_is_a_composition_error_listing_choices(compose_cfg):
@@ -68,7 +69,7 @@ def test_unknown_strategy_is_a_composition_error_listing_choices(compose_cfg):
 
 def test_policy_strategy_needs_a_policy(compose_cfg):
     with pytest.raises(ValueError, match="policy="):
-        evaluate(compose_cfg(SMALL + ["strategy=policy"]))
+        eval_config(compose_cfg(SMALL + ["strategy=policy"]))
 
 
 def test_cli_writes_metrics_and_never_overwrites(tmp_path):
@@ -76,7 +77,7 @@ def test_cli_writes_metrics_and_never_overwrites(tmp_path):
     cmd = [
         sys.executable,
         "-m",
-        "swimrl.evaluate",
+        "swimrl.cli.eval",
         *SMALL,
         "strategy=sto",
         "flow.kubo=10",
@@ -104,3 +105,15 @@ def test_cli_writes_metrics_and_never_overwrites(tmp_path):
     again = subprocess.run(cmd, capture_output=True, text=True)
     assert again.returncode != 0 and "overwrite=true" in again.stderr
     assert (run / "metrics.json").read_text() == before
+
+
+def test_cli_bad_value_is_one_line_with_exit_code_2(tmp_path):
+    cmd = [sys.executable, "-m", "swimrl.cli.eval", *SMALL, "flow.kubo=-1",
+           f"hydra.run.dir={tmp_path / 'run'}"]
+    out = subprocess.run(cmd, capture_output=True, text=True)
+    assert out.returncode == 2
+    assert out.stderr.strip().splitlines() == [
+        "error: flow.kubo=-1.0 is invalid: allowed > 0 (e.g. 0.1, 1, 10, 1e7)"]
+    full = subprocess.run(cmd, capture_output=True, text=True,
+                          env={**os.environ, "HYDRA_FULL_ERROR": "1"})
+    assert full.returncode != 0 and "Traceback" in full.stderr and "flow.kubo" in full.stderr

@@ -8,7 +8,8 @@ import math
 import pytest
 import torch
 
-from swimrl.flows.dns import DNS, CFLError, DNSParamError, DNSParams, SpectralGrid, random_state
+from swimrl.errors import ConfigError
+from swimrl.flows.dns import DNS, CFLError, DNSParams, SpectralGrid, random_state
 from swimrl.flows.dns.equation import Advection, linear_operator
 from swimrl.flows.dns.forcing import SteadyForcing
 from swimrl.flows.dns.state import flow_channels, state_from_vorticity
@@ -207,25 +208,25 @@ def test_cfl_check_reports_nonfinite_flow():
 @pytest.mark.parametrize(
     ("key", "value", "fragment"),
     [
-        ("n", 31, "dns.n=31 out of range: must be an even integer >= 8"),
+        ("n", 31, "dns.n=31 is invalid: allowed an even integer >= 8"),
         ("n", 4, "dns.n=4"),
-        ("nu", -1.0, "dns.nu=-1.0 out of range: must be >= 0"),
-        ("alpha", float("nan"), "dns.alpha=nan out of range: must be a finite number"),
-        ("hypo_power", -1.0, "dns.hypo_power=-1.0 out of range: must be in [0, 8]"),
-        ("epsilon", -0.1, "dns.epsilon=-0.1 out of range: must be >= 0"),
-        ("k_f", 0.5, "dns.k_f=0.5 out of range: must be in [1, 10]"),
-        ("k_f", 100.0, "dns.k_f=100.0 out of range"),
-        ("forcing_width", 0.0, "dns.forcing_width=0.0 out of range: must be in (0, k_f=3.0]"),
-        ("dt", 0.0, "dns.dt=0.0 out of range: must be > 0"),
-        ("dtype", "float16", "dns.dtype='float16' out of range: must be one of"),
-        ("device", "tpu", "dns.device='tpu' out of range"),
-        ("cfl_max", 2.0, "dns.cfl_max=2.0 out of range: must be in (0, 1.35]"),
-        ("cfl_every", 0, "dns.cfl_every=0 out of range: must be an integer >= 1"),
-        ("length", -1.0, "dns.length=-1.0 out of range: must be > 0"),
+        ("nu", -1.0, "dns.nu=-1.0 is invalid: allowed >= 0"),
+        ("alpha", float("nan"), "dns.alpha=nan is invalid: allowed a finite number"),
+        ("hypo_power", -1.0, "dns.hypo_power=-1.0 is invalid: allowed in [0, 8]"),
+        ("epsilon", -0.1, "dns.epsilon=-0.1 is invalid: allowed >= 0"),
+        ("k_f", 0.5, "dns.k_f=0.5 is invalid: allowed in [1, 10]"),
+        ("k_f", 100.0, "dns.k_f=100.0 is invalid"),
+        ("forcing_width", 0.0, "dns.forcing_width=0.0 is invalid: allowed in (0, k_f=3.0]"),
+        ("dt", 0.0, "dns.dt=0.0 is invalid: allowed > 0"),
+        ("dtype", "float16", "dns.dtype='float16' is invalid: allowed one of"),
+        ("device", "tpu", "dns.device='tpu' is invalid"),
+        ("cfl_max", 2.0, "dns.cfl_max=2.0 is invalid: allowed in (0, 1.35]"),
+        ("cfl_every", 0, "dns.cfl_every=0 is invalid: allowed an integer >= 1"),
+        ("length", -1.0, "dns.length=-1.0 is invalid: allowed > 0"),
     ],
 )
 def test_bad_parameters_raise_one_line_errors(key, value, fragment):
-    with pytest.raises(DNSParamError) as err:
+    with pytest.raises(ConfigError) as err:
         DNSParams(n=32, **{key: value}) if key != "n" else DNSParams(n=value)
     msg = str(err.value)
     assert fragment in msg
@@ -233,7 +234,7 @@ def test_bad_parameters_raise_one_line_errors(key, value, fragment):
 
 
 def test_unknown_parameter_key_is_rejected():
-    with pytest.raises(DNSParamError, match="dns.viscosity is not a DNS parameter"):
+    with pytest.raises(ConfigError, match="dns.viscosity is not a DNS parameter"):
         DNSParams.from_mapping({"viscosity": 1.0})
 
 

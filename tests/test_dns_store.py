@@ -13,11 +13,13 @@ import pytest
 import torch
 import xarray as xr
 import zarr
-from hydra import compose, initialize_config_dir
+from hydra import compose, initialize_config_module
 
-from swimrl.flows.dns import DNSStore, SpectralGrid, flow_channels
-from swimrl.flows.dns.cli import CONF_DIR, run_dns
+from swimrl.config import dns_run
+from swimrl.flows.dns import DNSParams, SpectralGrid, flow_channels
+from swimrl.flows.dns.run import run_dns as _run_dns
 from swimrl.flows.dns.store import DNSStoreWriter
+from swimrl.flows.sources import DNSStore
 
 torch.set_num_threads(1)
 
@@ -28,16 +30,24 @@ SMALL = [
 
 
 def _cfg(path: Path, *extra: str):
-    with initialize_config_dir(config_dir=CONF_DIR, version_base="1.3"):
+    with initialize_config_module("swimrl.conf", version_base="1.3"):
         return compose(config_name="dns", overrides=[*SMALL, f"store.path={path}", *extra])
 
 
+def run_dns(cfg) -> Path:
+    """``swimrl-dns`` on a composed config."""
+    return _run_dns(dns_run(cfg))
+
+
 def test_default_config_is_the_documented_production_run():
-    with initialize_config_dir(config_dir=CONF_DIR, version_base="1.3"):
+    with initialize_config_module("swimrl.conf", version_base="1.3"):
         cfg = compose(config_name="dns")
+        flow = compose(config_name="evaluate", overrides=["flow=dns"]).flow
     assert cfg.dns.n == 512 and cfg.dns.k_f == 3.0 and cfg.store.interval_tau_k == 0.1
     assert str(cfg.store.path).startswith("data/")
-    assert Path(CONF_DIR).resolve() == Path(__file__).resolve().parents[1] / "conf"
+    # one solver group: swimrl-dns, flow=dns and the DNSParams defaults agree
+    assert flow.dns == cfg.dns and flow.spinup == cfg.spinup
+    assert dns_run(cfg).params == DNSParams()
 
 
 def test_store_round_trip_and_metadata(tmp_path):
@@ -128,7 +138,7 @@ def test_console_entry_point_runs(tmp_path):
     path = tmp_path / "cli.zarr"
     env = {**os.environ, "PYTHONPATH": str(Path(__file__).resolve().parents[1])}
     out = subprocess.run(
-        [sys.executable, "-m", "swimrl.flows.dns.cli", *SMALL, f"store.path={path}",
+        [sys.executable, "-m", "swimrl.cli.dns", *SMALL, f"store.path={path}",
          f"hydra.run.dir={tmp_path / 'hydra'}"],
         capture_output=True, text=True, env=env, timeout=120, check=False,
     )
@@ -138,7 +148,7 @@ def test_console_entry_point_runs(tmp_path):
 
 
 def test_plots_from_a_small_store(tmp_path):
-    from swimrl.flows.dns.plots import make_plots
+    from swimrl.analysis.dns_plots import make_plots
 
     path = run_dns(_cfg(tmp_path / "run.zarr"))
     summary = make_plots(path, tmp_path / "img", n_snapshots=3, fit=(3.0, 8.0))

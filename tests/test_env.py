@@ -6,11 +6,10 @@ import pytest
 import torch
 from torchrl.envs.utils import check_env_specs
 
-from swimrl.builders import build_env
-from swimrl.config import EnvParams
-from swimrl.env import SwimmerEnv
+from swimrl.config import eval_setup
+from swimrl.env import EnvParams, SwimmerEnv
 from swimrl.flows.stochastic import StochasticFlow
-from swimrl.strategies import ShortTimeOptimal, as_actor
+from swimrl.policies.baselines import ShortTimeOptimal, as_actor
 
 from .conftest import SMALL
 
@@ -126,8 +125,8 @@ def test_rotational_noise_diffuses_the_orientation():
 
 
 def test_build_env_from_config(compose_cfg):
-    cfg = compose_cfg(SMALL + ["signals=nth_snp"])
-    env = build_env(cfg, 2, 3, 0, torch.device("cpu"), torch.float32)
+    setup = eval_setup(compose_cfg(SMALL + ["signals=nth_snp"]))
+    env = SwimmerEnv.build(setup.flow, setup.params, setup.runtime, 2, 3, 0)
     td = env.reset()
     assert td["observation"].shape == (2, 3, 2)
     assert torch.equal(td["observation"], td["signals"][..., [1, 3]])

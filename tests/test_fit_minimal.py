@@ -10,8 +10,8 @@ import numpy as np
 import pytest
 import torch
 
-from swimrl.fit_minimal import fit_minimal
-from swimrl.strategies import minimal_model
+from swimrl.analysis.fit_minimal import fit_minimal
+from swimrl.policies.baselines import minimal_model
 
 from .conftest import SMALL
 
@@ -40,7 +40,7 @@ def test_cli_fits_a_strategy(tmp_path):
     cmd = [
         sys.executable,
         "-m",
-        "swimrl.fit_minimal",
+        "swimrl.cli.fit_minimal",
         *SMALL,
         "strategy=minimal",
         "strategy.c1=1.5",

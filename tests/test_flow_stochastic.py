@@ -7,7 +7,7 @@ import math
 import pytest
 import torch
 
-from swimrl.flows.fields import gradient_norm2
+from swimrl.flows.base import gradient_norm2
 from swimrl.flows.stochastic import TAU_K, StochasticFlow, gaussian_spectrum
 
 

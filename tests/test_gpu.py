@@ -5,8 +5,7 @@ from __future__ import annotations
 import pytest
 import torch
 
-from swimrl.config import EnvParams
-from swimrl.env import SwimmerEnv
+from swimrl.env import EnvParams, SwimmerEnv
 from swimrl.flows.stochastic import StochasticFlow
 
 pytestmark = pytest.mark.gpu

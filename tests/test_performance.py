@@ -8,7 +8,9 @@ import math
 import numpy as np
 import pytest
 
-from swimrl.performance import load, main, markdown, paired_ratio, summarise
+from swimrl.analysis.performance import load, markdown, summarise
+from swimrl.cli.performance import main
+from swimrl.evaluation.statistics import paired_ratio
 
 
 def _row(label, per):

@@ -9,21 +9,24 @@ import torch
 from tensordict import TensorDict
 from torchrl.envs.utils import ExplorationType, set_exploration_type
 
-import swimrl.policy_io as pio
-from swimrl.config import ConfigError, EnvParams
-from swimrl.evaluate import evaluate
-from swimrl.rl.checkpoint import policy_meta, save_policy
-from swimrl.rl.models import make_actor, mean_network
+import swimrl.policies.files as pio
+from swimrl.config import compare_config, env_params, eval_config, gain_scan_config, train_config
+from swimrl.env import EnvParams
+from swimrl.errors import ConfigError
+from swimrl.evaluation.compare import compare
+from swimrl.evaluation.rollout import actor_for, evaluate
+from swimrl.policies.files import policy_meta, save_policy
+from swimrl.policies.networks import action_spec, mean_network, tanh_normal_actor
 
 from .conftest import SMALL
 
 
 def write_policy(compose_cfg, directory, signals: str = "all", seed: int = 0):
     """A tiny untrained policy saved as ``directory/policy.pt``; returns its actor."""
-    cfg = compose_cfg(SMALL + [f"signals={signals}"], name="train")
-    params = EnvParams.from_cfg(cfg)
+    cfg = train_config(compose_cfg(SMALL + [f"signals={signals}"], name="train"))
+    params = cfg.params
     torch.manual_seed(seed)
-    actor = make_actor(len(params.signals), params.shape_factor_max)
+    actor = tanh_normal_actor(len(params.signals), action_spec(params.shape_factor_max))
     with torch.no_grad():  # a non-trivial mean network
         for p in mean_network(actor).parameters():
             p.normal_(0, 0.5)
@@ -32,7 +35,7 @@ def write_policy(compose_cfg, directory, signals: str = "all", seed: int = 0):
         actor=actor,
         counters={"frames": 0, "updates": 0},
         config={},
-        meta=policy_meta(cfg, params),
+        meta=policy_meta(params, cfg.model, "float32"),
     )
     return actor
 
@@ -57,7 +60,7 @@ def test_short_names_resolve_in_the_package_root(pretrained):
 def test_default_pretrained_root_is_inside_the_package():
     import swimrl
 
-    expected = Path(swimrl.__file__).resolve().parent / "pretrained"
+    expected = Path(swimrl.__file__).resolve().parent / "policies" / "pretrained"
     assert expected == pio.PRETRAINED_ROOT
 
 
@@ -100,65 +103,71 @@ def test_loaded_policy_is_the_deterministic_mean(pretrained, compose_cfg, tmp_pa
 
 def test_signal_set_mismatch_is_one_clear_line(pretrained, compose_cfg, tmp_path):
     write_policy(compose_cfg, tmp_path, signals="nth_snp")
-    params = EnvParams.from_cfg(compose_cfg(SMALL))  # all five signals
+    params = env_params(compose_cfg(SMALL))  # all five signals
     with pytest.raises(ConfigError) as err:
         pio.load_policy(str(tmp_path), params)
     msg = str(err.value)
     assert "signals=nth_snp" in msg and "signals.names" in msg and "\n" not in msg
-    ok = EnvParams.from_cfg(compose_cfg(SMALL + ["signals=nth_snp"]))
+    ok = env_params(compose_cfg(SMALL + ["signals=nth_snp"]))
     assert pio.load_policy(str(tmp_path), ok) is not None
+
+
+def run_eval(cfg) -> dict:
+    """``swimrl-eval`` on a composed config (without writing metrics.json)."""
+    c = eval_config(cfg)
+    return evaluate(c.setup, actor_for(c.strategy, c.policy, c.setup.params), c.strategy.name)
 
 
 def test_swimrl_eval_with_a_pretrained_policy(pretrained, compose_cfg):
     cfg = compose_cfg(
         SMALL + ["strategy=policy", "policy=pretrained/ku10", "eval.n_flows=2", "eval.n_swimmers=8"]
     )
-    a, b = evaluate(cfg), evaluate(cfg)
+    a, b = run_eval(cfg), run_eval(cfg)
     assert a["strategy"] == "policy" and a["R_hat_mean"] > 0
     assert a["per_flow"] == b["per_flow"]  # deterministic policy, same flows
     bad = compose_cfg(SMALL + ["strategy=policy", "policy=pretrained/ku10", "signals=nth_snp"])
     with pytest.raises(ConfigError, match="signals=all"):
-        evaluate(bad)
+        run_eval(bad)
 
 
 def test_compare_pairs_policies_with_the_baselines(pretrained, compose_cfg):
     """``compare.strategies=[sto,policy]``: the policy row is the same numbers as swimrl-eval."""
-    from swimrl.compare import compare
-
     size = ["eval.n_flows=2", "eval.n_swimmers=8"]
-    cfg = compose_cfg(SMALL + size + ["compare.strategies=[sto,policy]",
-                                      "compare.policies=[pretrained/ku10,pretrained/ku1e7]"],
-                      name="compare")
-    rec = compare(cfg)
+
+    def run_compare(over):
+        return compare(compare_config(compose_cfg(SMALL + size + over, name="compare")))
+
+    rec = run_compare(["compare.strategies=[sto,policy]",
+                       "compare.policies=[pretrained/ku10,pretrained/ku1e7]"])
     assert [r["label"] for r in rec["rows"]] == [
         "sto", "policy(pretrained/ku10)", "policy(pretrained/ku1e7)"]
-    alone = evaluate(compose_cfg(SMALL + size + ["strategy=policy", "policy=pretrained/ku10"]))
+    alone = run_eval(compose_cfg(SMALL + size + ["strategy=policy", "policy=pretrained/ku10"]))
     assert rec["rows"][1]["per_flow"] == alone["per_flow"]
-    sto = evaluate(compose_cfg(SMALL + size + ["strategy=sto"]))
+    sto = run_eval(compose_cfg(SMALL + size + ["strategy=sto"]))
     assert rec["rows"][0]["per_flow"] == sto["per_flow"]
     ratio = sum(alone["per_flow"]) / sum(sto["per_flow"])
     assert rec["rows"][1]["ratio_to_first"] == pytest.approx(ratio, rel=1e-12)
-    shared = compare(compose_cfg(SMALL + size + [
-        "compare.strategies=[sto,policy]", "compare.policies=[pretrained/ku10,pretrained/ku1e7]",
-        "compare.shared_flows=true"], name="compare"))
+    shared = run_compare(["compare.strategies=[sto,policy]",
+                          "compare.policies=[pretrained/ku10,pretrained/ku1e7]",
+                          "compare.shared_flows=true"])
     assert [r["label"] for r in shared["rows"]] == [r["label"] for r in rec["rows"]]
     assert shared["rows"][1]["per_flow"] != shared["rows"][2]["per_flow"]
     for bad, match in ((["compare.policies=[]"], "compare.policies is empty"),
                        (["compare.policies=[pretrained/nope]"], "nope")):
         with pytest.raises((ValueError, FileNotFoundError), match=match):
-            compare(compose_cfg(SMALL + size + ["compare.strategies=[sto,policy]", *bad],
-                                name="compare"))
+            run_compare(["compare.strategies=[sto,policy]", *bad])
 
 
 def test_gain_scan_gain_one_is_the_policy_and_gain_zero_is_spherical(pretrained, compose_cfg):
-    from swimrl.gain_scan import gain_scan
+    from swimrl.analysis.gain_scan import gain_scan
 
     size = ["eval.n_flows=2", "eval.n_swimmers=8"]
-    rows = gain_scan(compose_cfg(SMALL + size + ["policy=pretrained/ku10", "gains=[1,0]"],
-                                 name="gain_scan"))
-    alone = evaluate(compose_cfg(SMALL + size + ["strategy=policy", "policy=pretrained/ku10"]))
+    rows = gain_scan(gain_scan_config(compose_cfg(
+        SMALL + size + ["policy=pretrained/ku10", "gains=[1,0]"], name="gain_scan")))
+    alone = run_eval(compose_cfg(SMALL + size + ["strategy=policy", "policy=pretrained/ku10"]))
     assert rows[0]["per_flow"] == alone["per_flow"]
-    naive0 = evaluate(compose_cfg(SMALL + size + ["strategy=naive", "strategy.shape_factor=0"]))
+    naive0 = run_eval(compose_cfg(SMALL + size + ["strategy=naive", "strategy.shape_factor=0"]))
     assert rows[1]["per_flow"] == pytest.approx(naive0["per_flow"], rel=1e-6)
     with pytest.raises(ValueError, match="gains=.*allowed"):
-        gain_scan(compose_cfg(SMALL + ["policy=pretrained/ku10", "gains=[-1]"], name="gain_scan"))
+        gain_scan_config(compose_cfg(SMALL + ["policy=pretrained/ku10", "gains=[-1]"],
+                                     name="gain_scan"))

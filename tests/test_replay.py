@@ -7,8 +7,7 @@ import math
 import pytest
 import torch
 
-from swimrl.config import EnvParams
-from swimrl.env import SwimmerEnv
+from swimrl.env import EnvParams, SwimmerEnv
 from swimrl.flows.replay import ReplayFlow
 
 
@@ -31,7 +30,7 @@ class MemorySource:
     def snapshot(self, j: int) -> torch.Tensor:
         return (1 + j * j / 10) * self.f + j * self.g
 
-    def channels(self, i0: int, i1: int) -> torch.Tensor:
+    def channels(self, i0: int, i1: int, flow: int = 0) -> torch.Tensor:
         assert 0 <= i0 <= i1 <= self.n_times
         self.reads += i1 - i0
         return torch.stack([self.snapshot(j) for j in range(i0, i1)]).float()
@@ -99,7 +98,8 @@ def test_env_on_replay_uses_the_runs_units():
 def test_live_dns_flow_matches_its_solver(compose_cfg):
     """flow=dns: a small live DNS; grid fields equal the solver's channels at snapshot times
     and the swimmer units are the measured u_rms and tau_K."""
-    from swimrl.builders import build_env
+    from swimrl.config import eval_setup
+    from swimrl.env import SwimmerEnv as Env
     from swimrl.flows.dns import flow_channels
 
     cfg = compose_cfg(
@@ -108,14 +108,15 @@ def test_live_dns_flow_matches_its_solver(compose_cfg):
             "flow.dns.n=32",
             "flow.dns.nu=2e-3",
             "flow.dns.dt=5e-3",
-            "flow.spinup_time=1.0",
-            "flow.measure_time=0.5",
+            "flow.spinup.time=1.0",
+            "flow.spinup.measure_time=0.5",
             "episode.duration=2.0",
             "threads=1",
             "kernel=eager",
         ]
     )
-    env = build_env(cfg, 2, 4, 0, torch.device("cpu"), torch.float32)
+    setup = eval_setup(cfg)
+    env = Env.build(setup.flow, setup.params, setup.runtime, 2, 4, 0)
     flow, run = env.flow, env.flow.source
     assert env.tau_k == pytest.approx(run.tau_k) and env.swim_speed == pytest.approx(
         0.707 * run.u_rms
@@ -140,9 +141,9 @@ def test_live_dns_flow_matches_its_solver(compose_cfg):
 
 
 def test_live_dns_bad_parameter_is_named(compose_cfg):
-    from swimrl.evaluate import validate_eval_cfg
+    from swimrl.config import eval_setup
 
-    with pytest.raises(ValueError, match="flow.measure_time"):
-        validate_eval_cfg(compose_cfg(["flow=dns", "flow.measure_time=20"]))
-    with pytest.raises(ValueError, match="nu"):
-        validate_eval_cfg(compose_cfg(["flow=dns", "flow.dns.nu=-1"]))
+    with pytest.raises(ValueError, match="flow.spinup.measure_time"):
+        eval_setup(compose_cfg(["flow=dns", "flow.spinup.measure_time=20"]))
+    with pytest.raises(ValueError, match="flow.dns.nu"):
+        eval_setup(compose_cfg(["flow=dns", "flow.dns.nu=-1"]))

@@ -8,9 +8,9 @@ import pytest
 import torch
 
 from swimrl.flows.interpolation import bilinear_periodic
-from swimrl.signals import compute_signals
-from swimrl.strategies import ShortTimeOptimal
-from swimrl.swimmer import heun_step, swimmer_rhs
+from swimrl.physics.signals import compute_signals
+from swimrl.physics.swimmer import heun_step, swimmer_rhs
+from swimrl.policies.baselines import ShortTimeOptimal
 
 
 @pytest.fixture(autouse=True)

@@ -8,7 +8,8 @@ import json
 
 import pytest
 
-from swimrl.table import build_rows, collect, main, swept_keys
+from swimrl.analysis.table import build_rows, collect, swept_keys
+from swimrl.cli.table import main
 
 
 def _config(kubo, seed, signals=("n_r", "n_theta")):

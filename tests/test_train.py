@@ -12,11 +12,12 @@ import pytest
 import torch
 from tensorboard.backend.event_processing.event_accumulator import EventAccumulator
 
-from swimrl.config import ConfigError
+from swimrl.config import train_config
+from swimrl.errors import ConfigError
+from swimrl.policies.files import checkpoint_path, load_file
 from swimrl.rl.builders import auto_reward_scale, make_env
-from swimrl.rl.checkpoint import checkpoint_path, load_file
-from swimrl.rl.plan import EVAL_SEED_OFFSET, validate_train_cfg
-from swimrl.rl.run import train
+from swimrl.rl.plan import EVAL_SEED_OFFSET, make_plan
+from swimrl.rl.run import train as _train
 from swimrl.rl.trainer import PPOTrainer
 
 from .conftest import SMALL
@@ -36,6 +37,16 @@ TINY = SMALL + [
     "eval.n_flows=2",
     "eval.n_swimmers=4",
 ]
+
+
+def train(cfg, out):
+    """``swimrl-train`` on a composed config."""
+    return _train(train_config(cfg), out)
+
+
+def validate_train_cfg(cfg):
+    """The plan of a composed training config (all checks first)."""
+    return make_plan(train_config(cfg))
 
 
 @pytest.fixture
@@ -90,12 +101,12 @@ def test_ppo_end_to_end(train_cfg, tmp_path):
 
 
 def test_validation_precedes_compute(train_cfg, tmp_path, monkeypatch):
-    import swimrl.builders as builders
+    import swimrl.env
 
     def boom(*a, **k):
         raise AssertionError("flow built before validation")
 
-    monkeypatch.setattr(builders, "build_flow", boom)
+    monkeypatch.setattr(swimrl.env, "build_flow", boom)
     with pytest.raises(ValueError, match="train.frames_per_batch"):
         train(train_cfg("train.frames_per_batch=81"), tmp_path)
     assert not (tmp_path / "tb").exists()
@@ -137,7 +148,7 @@ def test_plan_and_reward_scale(train_cfg):
     plan = validate_train_cfg(train_cfg("train.total_frames=330"))
     assert (plan.n_updates, plan.total_frames, plan.rollout_steps) == (4, 320, 10)
     assert plan.minibatches_per_epoch == 2 and plan.frames_per_episode == 4 * 20
-    env = make_env(train_cfg(), plan, torch.device("cpu"), torch.float32)
+    env = make_env(train_config(train_cfg()), plan)
     base = env.base_env
     scale = auto_reward_scale(base, 0.99)
     # (1 - gamma) / (v_s T_u), flow units: v_s = 0.707 u_rms, T_u = 0.1 tau_K
@@ -209,7 +220,8 @@ def test_kill_and_resume_round_trip(train_cfg, tmp_path, monkeypatch):
 
     # restore reproduces the state at the checkpoint exactly
     cfg = train_cfg("resume=true")
-    trainer = PPOTrainer(cfg, validate_train_cfg(cfg), tmp_path, torch.device("cpu"), torch.float32)
+    c = train_config(cfg)
+    trainer = PPOTrainer(c, make_plan(c), tmp_path, torch.device("cpu"), torch.float32)
     trainer.restore(checkpoint_path(tmp_path))
     _assert_same(_snapshot(trainer), saved[2])
 
@@ -240,7 +252,7 @@ def test_stop_after_updates_then_resume(train_cfg, tmp_path):
 
 
 def test_training_and_evaluation_flows_differ(train_cfg):
-    from swimrl.evaluate import chunk_seed
+    from swimrl.evaluation.rollout import chunk_seed
 
     plan = validate_train_cfg(train_cfg("seed=3"))
     assert plan.eval_seed == 3 + EVAL_SEED_OFFSET
@@ -249,7 +261,7 @@ def test_training_and_evaluation_flows_differ(train_cfg):
 
 
 def _cli(args, cwd, timeout=240):
-    cmd = [sys.executable, "-m", "swimrl.train", *args]
+    cmd = [sys.executable, "-m", "swimrl.cli.train", *args]
     return subprocess.run(cmd, capture_output=True, text=True, cwd=cwd, timeout=timeout)
 
 
@@ -273,7 +285,7 @@ def test_cli_multirun_joblib(tmp_path):
     seeds = {json.loads((sweep / r / "metrics.json").read_text())["config"]["seed"] for r in runs}
     assert seeds == {0, 1}
     table = subprocess.run(
-        [sys.executable, "-m", "swimrl.table", str(sweep), "--csv", str(tmp_path / "t.csv")],
+        [sys.executable, "-m", "swimrl.cli.table", str(sweep), "--csv", str(tmp_path / "t.csv")],
         capture_output=True,
         text=True,
     )
@@ -305,11 +317,9 @@ def test_cli_multirun_submitit_local(tmp_path):
 
 
 def test_slurm_launcher_preset_composes():
-    from hydra import compose, initialize_config_dir
+    from hydra import compose, initialize_config_module
 
-    from swimrl.paths import CONF_DIR
-
-    with initialize_config_dir(config_dir=str(CONF_DIR), version_base="1.3"):
+    with initialize_config_module("swimrl.conf", version_base="1.3"):
         cfg = compose(
             "train",
             overrides=["hydra/launcher=slurm", "train_preset=paper"],
@@ -326,11 +336,9 @@ def test_slurm_launcher_preset_composes():
 
 def test_bigbatch_preset_extends_default():
     """``train_preset=bigbatch``: the default preset's loss and learning rates, 64 flows."""
-    from hydra import compose, initialize_config_dir
+    from hydra import compose, initialize_config_module
 
-    from swimrl.paths import CONF_DIR
-
-    with initialize_config_dir(config_dir=str(CONF_DIR), version_base="1.3"):
+    with initialize_config_module("swimrl.conf", version_base="1.3"):
         default = compose("train")
         big = compose("train", overrides=["train_preset=bigbatch", "train.total_frames=1e7"])
     assert (big.train.n_flows, big.train.n_swimmers) == (64, 8)
@@ -344,18 +352,19 @@ def test_bigbatch_preset_extends_default():
 
 def test_training_in_a_stored_dns_run(compose_cfg, tmp_path):
     """``swimrl-train flow=dns_replay``: PPO on a (tiny) stored DNS run, swimmers in its units."""
-    from hydra import compose, initialize_config_dir
+    from hydra import compose, initialize_config_module
 
-    from swimrl.flows.dns import DNSStore
-    from swimrl.flows.dns.cli import CONF_DIR, run_dns
+    from swimrl.config import dns_run
+    from swimrl.flows.dns.run import run_dns
+    from swimrl.flows.sources import DNSStore
 
     store = tmp_path / "run.zarr"
-    with initialize_config_dir(config_dir=CONF_DIR, version_base="1.3"):
+    with initialize_config_module("swimrl.conf", version_base="1.3"):
         dns_cfg = compose(config_name="dns", overrides=[
             "dns.n=32", "dns.nu=5e-3", "dns.dt=4e-3", "spinup.time=0.2",
             "spinup.measure_time=0.1", "store.n_times=40", "store.diag_every=5",
             "progress=false", "threads=1", f"store.path={store}"])
-    run_dns(dns_cfg)
+    run_dns(dns_run(dns_cfg))
     s = DNSStore(store)
     tiny = [o for o in TINY if not o.startswith("flow.")]
     cfg = compose_cfg(tiny + ["flow=dns_replay", f"flow.path={store}", "train.eval_every=0"],

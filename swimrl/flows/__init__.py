@@ -1,7 +1,7 @@
 """Flows the swimmers move in.
 
 Every flow exposes the same five channels on a periodic grid, in this order
-(see :data:`swimrl.flows.fields.CHANNELS`):
+(see :data:`swimrl.flows.base.CHANNELS`):
 
 ``u_x, u_y, S_xx, S_xy, omega``
 
@@ -9,6 +9,6 @@ with ``S = (grad u + grad u^T)/2`` (traceless in 2D, ``S_yy = -S_xx``) and
 ``omega = d_x u_y - d_y u_x``.
 """
 
-from swimrl.flows.fields import CHANNELS, FlowSample, GriddedFlow
+from swimrl.flows.base import CHANNELS, GriddedFlow
 
-__all__ = ["CHANNELS", "FlowSample", "GriddedFlow"]
+__all__ = ["CHANNELS", "GriddedFlow"]

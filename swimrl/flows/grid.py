@@ -46,9 +46,3 @@ class PeriodicGrid:
         k = torch.fft.fftfreq(self.n, d=self.spacing, device=device, dtype=dtype) * (2 * math.pi)
         ky, kx = torch.meshgrid(k, k, indexing="ij")
         return kx, ky
-
-    def periodic_distance2(self, device: torch.device | str = "cpu", dtype=torch.float64):
-        """Squared minimum-image distance ``r^2`` of every node from node (0, 0), shape (n, n)."""
-        x = self.coords(device, dtype)
-        x = torch.minimum(x, self.length - x)
-        return x[None, :] ** 2 + x[:, None] ** 2

@@ -13,7 +13,8 @@ decision interval so that it covers the whole interval (``M = T_u/Δ + 1`` snaps
 are read. Spatially the fields are periodically extended and
 interpolated bilinearly, as for the stochastic flow. Each realisation (row of the batch)
 starts its episode at a uniformly random stored time index (the swimmers' random start
-positions supply the random place).
+positions supply the random place), or, for a source that produces its snapshots on demand
+(``n_times = None``, a DNS stepped alongside), at the source's newest snapshot.
 """
 
 from __future__ import annotations
@@ -23,22 +24,26 @@ from typing import Protocol
 
 import torch
 
-from swimrl.flows.fields import GriddedFlow
+from swimrl.flows.base import GriddedFlow
 from swimrl.flows.grid import PeriodicGrid
 
 
 class SnapshotSource(Protocol):
-    """What a replay needs from a store (see :class:`swimrl.flows.dns.store.DNSStore`)."""
+    """What a replay needs from a run (:mod:`swimrl.flows.sources`).
 
-    n_times: int
+    ``n_times`` is the number of stored snapshots, or None for a run that produces them on
+    demand; such a run's newest snapshot is ``latest``.
+    """
+
+    n_times: int | None
     dt_store: float
     u_rms: float
     tau_k: float
     length: float
     n: int
 
-    def channels(self, i0: int, i1: int) -> torch.Tensor:
-        """Snapshots ``i0 <= j < i1`` as ``(i1 - i0, n, n, 5)``."""
+    def channels(self, i0: int, i1: int, flow: int = 0) -> torch.Tensor:
+        """Snapshots ``i0 <= j < i1`` seen by realisation ``flow``, ``(i1 - i0, n, n, 5)``."""
         ...
 
 
@@ -64,14 +69,14 @@ class ReplayFlow(GriddedFlow):
         else:
             window = math.ceil(ratio) + 2
         needed = math.ceil(episode_time / self.delta - 1e-9) + 1
-        if needed > source.n_times:
+        if source.n_times is not None and needed > source.n_times:
             raise ValueError(
                 f"flow.path: the stored run has {source.n_times} snapshots "
                 f"({(source.n_times - 1) * self.delta / source.tau_k:.1f} tau_K) but an episode "
                 f"needs {needed} ({episode_time / source.tau_k:.1f} tau_K): store a longer run "
                 "or shorten episode.duration"
             )
-        self.max_start = source.n_times - needed
+        self.max_start = None if source.n_times is None else source.n_times - needed
         grid = PeriodicGrid(int(source.n), float(source.length))
         super().__init__(grid, n_flows, window, device, dtype)
         self.u_rms = float(source.u_rms)
@@ -82,7 +87,10 @@ class ReplayFlow(GriddedFlow):
         self.reset()
 
     def start_indices(self, count: int) -> torch.Tensor:
-        """Stored index of ``t = 0`` for ``count`` new episodes: ``j ~ U{0..max_start}``."""
+        """Stored index of ``t = 0`` for ``count`` new episodes: ``j ~ U{0..max_start}`` (a run
+        producing snapshots on demand: its newest one)."""
+        if self.max_start is None:
+            return torch.full((count,), self.source.latest, dtype=torch.int64)
         return torch.randint(
             0, self.max_start + 1, (count,), generator=self.generator, device=self.device
         ).cpu()
@@ -99,9 +107,6 @@ class ReplayFlow(GriddedFlow):
         self._load_window(idx, self.start[idx])
         self.coeffs[idx.to(self.device)] = self._weights(self.time[idx.to(self.time.device)], idx)
 
-    def _read(self, flow: int, i0: int, i1: int) -> torch.Tensor:
-        """Snapshots ``i0 <= j < i1`` seen by ``flow`` (a replay: the same run for all)."""
-        return self.source.channels(i0, i1)
 
     def _load_window(self, flows: torch.Tensor, first: torch.Tensor) -> None:
         """Make snapshots ``first .. first + M - 1`` the basis of each flow in ``flows``."""
@@ -111,10 +116,10 @@ class ReplayFlow(GriddedFlow):
             shift = j0 - old
             if 0 < shift < m:  # keep the overlap, read only the new snapshots
                 self.basis[f, :, :, : m - shift] = self.basis[f, :, :, shift:].clone()
-                new = self._read(f, old + m, j0 + m)
+                new = self.source.channels(old + m, j0 + m, f)
                 self.basis[f, :, :, m - shift :] = new.permute(1, 2, 0, 3).to(self.basis)
             elif shift != 0:
-                snaps = self._read(f, j0, j0 + m)
+                snaps = self.source.channels(j0, j0 + m, f)
                 self.basis[f] = snaps.permute(1, 2, 0, 3).to(self.basis)
             self.window_start[f] = j0
 
@@ -132,9 +137,8 @@ class ReplayFlow(GriddedFlow):
         t0 = self.time.cpu().double()
         first = (self.start.double() + t0 / self.delta + 1e-6).floor().to(torch.int64)
         last = self.start.double() + (t0 + n_steps * dt) / self.delta
-        if torch.any(last > first + self.n_basis - 1 + 1e-6) or torch.any(
-            last > self.source.n_times - 1 + 1e-6
-        ):
+        end = math.inf if self.source.n_times is None else self.source.n_times - 1
+        if torch.any(last > first + self.n_basis - 1 + 1e-6) or torch.any(last > end + 1e-6):
             raise RuntimeError("replay window too short for the interval (or past the run)")
         self._load_window(flows, first)
         times = t0[None, :] + dt * torch.arange(n_steps + 1, dtype=torch.float64)[:, None]

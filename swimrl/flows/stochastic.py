@@ -38,7 +38,7 @@ import math
 
 import torch
 
-from swimrl.flows.fields import GriddedFlow
+from swimrl.flows.base import GriddedFlow
 from swimrl.flows.grid import PeriodicGrid
 
 #: Kolmogorov time of the model in units ell_f / u_rms (see module docstring).
@@ -100,10 +100,6 @@ class StochasticFlow(GriddedFlow):
         dtype: torch.dtype = torch.float32,
         generator: torch.Generator | None = None,
     ):
-        if not kubo > 0:
-            raise ValueError(f"flow.kubo={kubo} must be > 0")
-        if n_modes < 1:
-            raise ValueError(f"flow.n_modes={n_modes} must be >= 1")
         grid = PeriodicGrid(n_grid, n_grid * spacing)
         super().__init__(grid, n_flows, n_modes, device, dtype)
         self.kubo = float(kubo)

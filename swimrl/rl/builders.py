@@ -16,7 +16,6 @@ scaled.
 from __future__ import annotations
 
 import torch
-from omegaconf import DictConfig
 from torch.optim.lr_scheduler import LambdaLR
 from torchrl.collectors import Collector
 from torchrl.envs import EnvBase, RewardScaling, TransformedEnv
@@ -24,11 +23,9 @@ from torchrl.objectives import ClipPPOLoss
 from torchrl.objectives.value import GAE
 from torchrl.record.loggers.tensorboard import TensorboardLogger
 
-from swimrl.builders import build_env
 from swimrl.env import SwimmerEnv
-from swimrl.rl.models import make_actor as _make_actor
-from swimrl.rl.models import make_critic as _make_critic
-from swimrl.rl.plan import TrainPlan
+from swimrl.policies.networks import tanh_normal_actor, value_critic
+from swimrl.rl.plan import TrainConfig, TrainPlan
 
 
 def auto_reward_scale(env: SwimmerEnv, gamma: float) -> float:
@@ -41,10 +38,13 @@ def auto_reward_scale(env: SwimmerEnv, gamma: float) -> float:
     return (1.0 - gamma) / per_step
 
 
-def make_env(cfg: DictConfig, plan: TrainPlan, device, dtype) -> TransformedEnv:
+def make_env(cfg: TrainConfig, plan: TrainPlan) -> TransformedEnv:
     """Training env: ``n_flows x n_swimmers`` swimmers seeded with the training stream, with
     the reward multiplied by the reward scale."""
-    base = build_env(cfg, plan.n_flows, plan.n_swimmers, plan.train_seed, device, dtype)
+    base = SwimmerEnv.build(
+        cfg.evaluation.flow, plan.params, cfg.runtime, plan.n_flows, plan.n_swimmers,
+        plan.train_seed,
+    )
     scale = plan.reward_scale
     if scale is None:
         scale = auto_reward_scale(base, float(cfg.loss.gamma))
@@ -61,11 +61,12 @@ def reward_scale_of(env: TransformedEnv) -> float:
     return float(env.transform.scale)
 
 
-def make_actor(cfg: DictConfig, params, device, dtype):
-    """Actor for ``len(signals.names)`` inputs (see :func:`swimrl.rl.models.make_actor`)."""
-    return _make_actor(
-        len(params.signals),
-        params.shape_factor_max,
+def make_actor(cfg: TrainConfig, env: EnvBase, device, dtype):
+    """Actor on the env's observation, bounded by its action spec (the ``TanhNormal``'s
+    ``low``/``high``; see :func:`swimrl.policies.networks.tanh_normal_actor`)."""
+    return tanh_normal_actor(
+        env.observation_spec["observation"].shape[-1],
+        env.action_spec_unbatched,
         hidden=[int(h) for h in cfg.model.hidden],
         activation=str(cfg.model.activation),
         init_std=float(cfg.model.init_std),
@@ -74,10 +75,10 @@ def make_actor(cfg: DictConfig, params, device, dtype):
     )
 
 
-def make_critic(cfg: DictConfig, params, device, dtype):
+def make_critic(cfg: TrainConfig, env: EnvBase, device, dtype):
     """Critic ``V(observation)``."""
-    return _make_critic(
-        len(params.signals),
+    return value_critic(
+        env.observation_spec["observation"].shape[-1],
         hidden=[int(h) for h in cfg.model.hidden],
         activation=str(cfg.model.activation),
         device=device,
@@ -103,7 +104,7 @@ def make_collector(env: EnvBase, actor, plan: TrainPlan, total_frames: int, devi
     )
 
 
-def make_loss(cfg: DictConfig, actor, critic) -> tuple[ClipPPOLoss, GAE]:
+def make_loss(cfg: TrainConfig, actor, critic) -> tuple[ClipPPOLoss, GAE]:
     r"""``ClipPPOLoss`` (paper ``J(w)``, clip ``epsilon``, entropy bonus) and ``GAE``
     (``A_i = sum_k (gamma lambda)^k delta_{i+k}``, ``delta_i = r_i + gamma V(s_{i+1}) -
     V(s_i)``, bootstrapped at truncation since ``terminated`` is never set)."""
@@ -126,7 +127,7 @@ def make_loss(cfg: DictConfig, actor, critic) -> tuple[ClipPPOLoss, GAE]:
     return loss, gae
 
 
-def make_optimizers(cfg: DictConfig, actor, critic) -> tuple[torch.optim.Adam, torch.optim.Adam]:
+def make_optimizers(cfg: TrainConfig, actor, critic) -> tuple[torch.optim.Adam, torch.optim.Adam]:
     """Separate Adam optimisers (paper: ``4e-4`` actor, ``8e-5`` critic)."""
     eps = float(cfg.optim.eps)
     return (
@@ -135,7 +136,7 @@ def make_optimizers(cfg: DictConfig, actor, critic) -> tuple[torch.optim.Adam, t
     )
 
 
-def make_schedulers(cfg: DictConfig, optimizers, n_updates: int) -> list[LambdaLR]:
+def make_schedulers(cfg: TrainConfig, optimizers, n_updates: int) -> list[LambdaLR]:
     """Learning rate ``lr_0 (1 - u / n_updates)`` at update ``u`` (``optim.anneal=linear``,
     reaching ``lr_0 / n_updates`` at the last update) or constant (``none``); stepped once
     per update."""

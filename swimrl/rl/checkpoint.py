@@ -1,4 +1,4 @@
-r"""Atomic checkpoints of a training run, and the exported policy.
+r"""Atomic checkpoints of a training run (the exported policy: :mod:`swimrl.policies.files`).
 
 Layout of a run directory::
 
@@ -18,63 +18,47 @@ previous or the new checkpoint, never a truncated one.
 
 from __future__ import annotations
 
-import dataclasses
-import os
 from pathlib import Path
 
 import torch
 
-from swimrl.config import EnvParams
+from swimrl.policies.files import CHECKPOINT_FORMAT, atomic_save
 
-CHECKPOINT_FORMAT = "swimrl-ppo-checkpoint/1"
-POLICY_FORMAT = "swimrl-ppo-policy/1"
-
-
-def checkpoint_path(run_dir: Path) -> Path:
-    return Path(run_dir) / "checkpoints" / "last.pt"
-
-
-def policy_path(run_dir: Path) -> Path:
-    return Path(run_dir) / "policy.pt"
+#: Config keys renamed since a checkpoint may have been written: old key -> new key.
+LEGACY_KEYS = {
+    "episode.shape_factor_max": "swimmer.shape_factor_max",
+    "flow.spinup_time": "flow.spinup.time",
+    "flow.measure_time": "flow.spinup.measure_time",
+    "flow.snapshot_tau_k": "flow.interval_tau_k",
+}
 
 
-def atomic_save(obj, path: Path) -> Path:
-    """``torch.save`` to ``path.tmp``, flush to disk, then ``os.replace`` onto ``path``."""
-    path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    tmp = path.with_name(path.name + ".tmp")
-    with open(tmp, "wb") as fh:
-        torch.save(obj, fh)
-        fh.flush()
-        os.fsync(fh.fileno())
-    os.replace(tmp, path)
-    return path
-
-
-def env_params_dict(params: EnvParams) -> dict:
-    """Constructor arguments of ``params`` as plain Python values."""
-    out = {}
-    for f in dataclasses.fields(params):
-        if f.init:
-            v = getattr(params, f.name)
-            out[f.name] = list(v) if isinstance(v, tuple) else v
+def upgrade_config(config: dict) -> dict:
+    """A checkpoint's stored config with renamed keys (:data:`LEGACY_KEYS`) moved to their
+    current names; the values are unchanged."""
+    out = _copy(config)
+    for old, new in LEGACY_KEYS.items():
+        *path, last = old.split(".")
+        parent = _node(out, path)
+        if parent is None or last not in parent:
+            continue
+        value = parent.pop(last)
+        *path, last = new.split(".")
+        node = out
+        for part in path:
+            node = node.setdefault(part, {})
+        node.setdefault(last, value)
     return out
 
 
-def policy_meta(cfg, params: EnvParams) -> dict:
-    """What is needed to rebuild the actor and check it against an evaluation config."""
-    return {
-        "signals": list(params.signals),
-        "env_params": env_params_dict(params),
-        "model": {
-            "n_obs": len(params.signals),
-            "hidden": [int(h) for h in cfg.model.hidden],
-            "activation": str(cfg.model.activation),
-            "init_std": float(cfg.model.init_std),
-            "shape_factor_max": float(params.shape_factor_max),
-            "dtype": str(cfg.dtype),
-        },
-    }
+def _copy(d):
+    return {k: _copy(v) for k, v in d.items()} if isinstance(d, dict) else d
+
+
+def _node(d: dict, path: list[str]) -> dict | None:
+    for part in path:
+        d = d.get(part) if isinstance(d, dict) else None
+    return d if isinstance(d, dict) else None
 
 
 def capture_rng(env_generator: torch.Generator) -> dict:
@@ -119,22 +103,3 @@ def save_checkpoint(
         },
         path,
     )
-
-
-def save_policy(path: Path, *, actor, counters: dict, config: dict, meta: dict) -> Path:
-    """Export the actor (all its parameters, incl. ``log sigma``) with its metadata."""
-    return atomic_save(
-        {
-            "format": POLICY_FORMAT,
-            "actor": actor.state_dict(),
-            "counters": dict(counters),
-            "config": config,
-            **meta,
-        },
-        path,
-    )
-
-
-def load_file(path: Path, map_location="cpu") -> dict:
-    """Load a checkpoint or policy file (tensors and plain containers only)."""
-    return torch.load(Path(path), map_location=map_location, weights_only=True)

@@ -1,4 +1,5 @@
-r"""Validated training plan: sizes, schedule and seeds, checked before any compute.
+r"""Training settings (``train.*``, ``loss.*``, ``optim.*``, ``model.*``) and the plan derived
+from them: sizes, schedule and seeds, all checked before any compute.
 
 Counting (all in *env-batch elements*, i.e. swimmer decisions):
 
@@ -15,7 +16,7 @@ Counting (all in *env-batch elements*, i.e. swimmer decisions):
 
 Seeds: training flows and initial conditions come from
 ``SeedSequence([seed, TRAIN_STREAM])``; evaluations (periodic and final) use
-:func:`swimrl.evaluate.evaluate` with ``seed + EVAL_SEED_OFFSET``, whose flow chunks are
+:func:`swimrl.evaluation.rollout.evaluate` with ``seed + EVAL_SEED_OFFSET``, whose flow chunks are
 ``SeedSequence([seed + EVAL_SEED_OFFSET, chunk])``: streams disjoint from training, so the
 reported ``R_hat`` is measured on held-out flow realisations.
 """
@@ -25,10 +26,12 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-from omegaconf import DictConfig
 
-from swimrl.config import ConfigError, EnvParams
-from swimrl.evaluate import validate_eval_cfg
+from swimrl.env import EnvParams
+from swimrl.errors import as_bool, as_float, as_int, one_of, require
+from swimrl.evaluation.rollout import EvalSetup
+from swimrl.policies.networks import ModelSpec
+from swimrl.runtime import Runtime
 
 #: Offset added to ``seed`` for the held-out evaluation flows.
 EVAL_SEED_OFFSET = 1_000_000
@@ -42,36 +45,137 @@ def training_seed(seed: int) -> int:
     return int(np.random.SeedSequence([int(seed), TRAIN_STREAM]).generate_state(1)[0])
 
 
-def _fail(key: str, value, allowed: str) -> None:
-    raise ConfigError(f"{key}={value!r} is invalid: allowed {allowed}")
+@dataclass(frozen=True)
+class TrainSettings:
+    """``train.*``: batch and budget sizes, evaluation and checkpoint cadence."""
+
+    n_flows: int
+    n_swimmers: int
+    frames_per_batch: int
+    total_frames: int
+    minibatch_size: int
+    minibatches_per_epoch: int | None
+    epochs: int
+    reward_scale: float | None  # None: automatic (1 - gamma) / (v_s T_u), set with the env
+    eval_every: int
+    eval_flows: int
+    eval_swimmers: int
+    checkpoint_every: int
+    checkpoint_seconds: float
+    stop_after_updates: int | None = None
+    progress: bool = True
+    compare_baselines: bool = False
+
+    def __post_init__(self) -> None:
+        def k(key: str) -> str:
+            return f"train.{key}"
+
+        n_flows, n_swimmers = as_int(k("n_flows"), self.n_flows), as_int(k("n_swimmers"),
+                                                                           self.n_swimmers)
+        fpb = as_int(k("frames_per_batch"), self.frames_per_batch)
+        batch = n_flows * n_swimmers
+        require(fpb % batch == 0, k("frames_per_batch"), self.frames_per_batch,
+                f"a multiple of train.n_flows*train.n_swimmers={batch}")
+        total = as_int(k("total_frames"), self.total_frames)
+        require(total >= fpb, k("total_frames"), self.total_frames,
+                f">= train.frames_per_batch={fpb}")
+        mb = as_int(k("minibatch_size"), self.minibatch_size)
+        require(mb <= fpb, k("minibatch_size"), self.minibatch_size,
+                f"<= train.frames_per_batch={fpb}")
+        if self.minibatches_per_epoch is not None:
+            n_mb = as_int(k("minibatches_per_epoch"), self.minibatches_per_epoch)
+            require(n_mb <= fpb // mb, k("minibatches_per_epoch"), self.minibatches_per_epoch,
+                    f"null or <= frames_per_batch // minibatch_size = {fpb // mb}")
+        as_int(k("epochs"), self.epochs)
+        as_int(k("eval_every"), self.eval_every, low=0)
+        as_int(k("eval_flows"), self.eval_flows)
+        as_int(k("eval_swimmers"), self.eval_swimmers)
+        as_int(k("checkpoint_every"), self.checkpoint_every)
+        as_float(k("checkpoint_seconds"), self.checkpoint_seconds, lambda v: v > 0, "> 0 (seconds)")
+        if self.stop_after_updates is not None:
+            as_int(k("stop_after_updates"), self.stop_after_updates)
+        if self.reward_scale is not None:
+            as_float(k("reward_scale"), self.reward_scale, lambda v: v > 0,
+                     "'auto' or a number > 0")
+        as_bool(k("progress"), self.progress)
+        as_bool(k("compare_baselines"), self.compare_baselines)
 
 
-def _int(cfg: DictConfig, key: str, low: int = 1) -> int:
-    """``cfg[key]`` as an integer ``>= low`` (accepts ``1e6``-style floats that are whole)."""
-    node = cfg
-    for part in key.split("."):
-        node = node[part]
-    value = node
-    try:
-        f = float(value)
-    except (TypeError, ValueError):
-        _fail(key, value, f"an integer >= {low}")
-    if f != int(f) or f < low:
-        _fail(key, value, f"an integer >= {low}")
-    return int(f)
+@dataclass(frozen=True)
+class LossSettings:
+    """``loss.*``: ``ClipPPOLoss`` and ``GAE`` settings."""
+
+    gamma: float
+    gae_lambda: float
+    clip_epsilon: float
+    entropy_coeff: float
+    critic_coeff: float
+    loss_critic_type: str
+    normalize_advantage: bool
+
+    def __post_init__(self) -> None:
+        as_float("loss.gamma", self.gamma, lambda v: 0 < v <= 1, "in (0, 1]")
+        as_float("loss.gae_lambda", self.gae_lambda, lambda v: 0 <= v <= 1, "in [0, 1]")
+        as_float("loss.clip_epsilon", self.clip_epsilon, lambda v: 0 < v < 1, "in (0, 1)")
+        as_float("loss.entropy_coeff", self.entropy_coeff, lambda v: v >= 0, ">= 0")
+        as_float("loss.critic_coeff", self.critic_coeff, lambda v: v > 0, "> 0")
+        one_of("loss.loss_critic_type", self.loss_critic_type, LOSS_CRITIC_TYPES)
+        as_bool("loss.normalize_advantage", self.normalize_advantage)
 
 
-def _float(cfg: DictConfig, key: str, cond, allowed: str) -> float:
-    node = cfg
-    for part in key.split("."):
-        node = node[part]
-    try:
-        f = float(node)
-    except (TypeError, ValueError):
-        _fail(key, node, allowed)
-    if not cond(f):
-        _fail(key, node, allowed)
-    return f
+@dataclass(frozen=True)
+class OptimSettings:
+    """``optim.*``: Adam learning rates and epsilon, annealing, gradient clipping."""
+
+    lr_actor: float
+    lr_critic: float
+    anneal: str
+    eps: float
+    max_grad_norm: float | None
+
+    def __post_init__(self) -> None:
+        as_float("optim.lr_actor", self.lr_actor, lambda v: v > 0, "> 0")
+        as_float("optim.lr_critic", self.lr_critic, lambda v: v > 0, "> 0")
+        one_of("optim.anneal", self.anneal, ("linear", "none"))
+        as_float("optim.eps", self.eps, lambda v: v > 0, "> 0")
+        if self.max_grad_norm is not None:
+            as_float("optim.max_grad_norm", self.max_grad_norm, lambda v: v > 0, "null or > 0")
+
+
+@dataclass(frozen=True)
+class TrainConfig:
+    """``swimrl-train``: the evaluation setup (physics, flow, final evaluation) and the PPO
+    settings; the attribute names follow the config groups (``cfg.loss.gamma``, ...)."""
+
+    evaluation: EvalSetup
+    train: TrainSettings
+    loss: LossSettings
+    optim: OptimSettings
+    model: ModelSpec
+    resume: bool = False
+    overwrite: bool = False
+
+    def __post_init__(self) -> None:
+        as_bool("resume", self.resume)
+        as_bool("overwrite", self.overwrite)
+
+    @property
+    def seed(self) -> int:
+        """The run's seed (network init, action sampling, training and evaluation flows)."""
+        return self.evaluation.seed
+
+    @property
+    def params(self) -> EnvParams:
+        return self.evaluation.params
+
+    @property
+    def runtime(self) -> Runtime:
+        return self.evaluation.runtime
+
+    @property
+    def record(self) -> dict:
+        """The resolved config, stored in checkpoints, policies and ``metrics.json``."""
+        return self.evaluation.record
 
 
 @dataclass(frozen=True)
@@ -103,80 +207,26 @@ class TrainPlan:
         return self.epochs * self.minibatches_per_epoch
 
 
-def validate_train_cfg(cfg: DictConfig) -> TrainPlan:
-    """All checks of a training config (physics, evaluation, PPO, sizes); one-line errors."""
-    params = validate_eval_cfg(cfg)
+def make_plan(cfg: TrainConfig) -> TrainPlan:
+    """Derived sizes: ``L = frames_per_batch / (F S)``, ``n_updates = total // frames_per_batch``,
+    minibatches per epoch (default: a full pass), and the training and evaluation seeds."""
     t = cfg.train
-    n_flows, n_swimmers = _int(cfg, "train.n_flows"), _int(cfg, "train.n_swimmers")
-    fpb = _int(cfg, "train.frames_per_batch")
-    batch = n_flows * n_swimmers
-    if fpb % batch:
-        _fail(
-            "train.frames_per_batch",
-            t.frames_per_batch,
-            f"a multiple of train.n_flows*train.n_swimmers={batch}",
-        )
-    total = _int(cfg, "train.total_frames")
-    if total < fpb:
-        _fail("train.total_frames", t.total_frames, f">= train.frames_per_batch={fpb}")
-    mb = _int(cfg, "train.minibatch_size")
-    if mb > fpb:
-        _fail("train.minibatch_size", t.minibatch_size, f"<= train.frames_per_batch={fpb}")
-    full = fpb // mb
-    if t.minibatches_per_epoch is None:
-        n_mb = full
-    else:
-        n_mb = _int(cfg, "train.minibatches_per_epoch")
-        if n_mb > full:
-            _fail(
-                "train.minibatches_per_epoch",
-                t.minibatches_per_epoch,
-                f"null or <= frames_per_batch // minibatch_size = {full}",
-            )
-    epochs = _int(cfg, "train.epochs")
-    eval_every = _int(cfg, "train.eval_every", low=0)
-    _int(cfg, "train.eval_flows")
-    _int(cfg, "train.eval_swimmers")
-    _int(cfg, "train.checkpoint_every")
-    _float(cfg, "train.checkpoint_seconds", lambda v: v > 0, "> 0 (seconds)")
-    if t.stop_after_updates is not None:
-        _int(cfg, "train.stop_after_updates")
-    if t.reward_scale in (None, "auto"):
-        scale = None
-    else:
-        scale = _float(cfg, "train.reward_scale", lambda v: v > 0, "'auto' or a number > 0")
-    _float(cfg, "loss.gamma", lambda v: 0 < v <= 1, "in (0, 1]")
-    _float(cfg, "loss.gae_lambda", lambda v: 0 <= v <= 1, "in [0, 1]")
-    _float(cfg, "loss.clip_epsilon", lambda v: 0 < v < 1, "in (0, 1)")
-    _float(cfg, "loss.entropy_coeff", lambda v: v >= 0, ">= 0")
-    _float(cfg, "loss.critic_coeff", lambda v: v > 0, "> 0")
-    if cfg.loss.loss_critic_type not in LOSS_CRITIC_TYPES:
-        _fail("loss.loss_critic_type", cfg.loss.loss_critic_type, f"one of {LOSS_CRITIC_TYPES}")
-    _float(cfg, "optim.lr_actor", lambda v: v > 0, "> 0")
-    _float(cfg, "optim.lr_critic", lambda v: v > 0, "> 0")
-    if cfg.optim.anneal not in ("linear", "none"):
-        _fail("optim.anneal", cfg.optim.anneal, "'linear' or 'none'")
-    if cfg.optim.max_grad_norm is not None:
-        _float(cfg, "optim.max_grad_norm", lambda v: v > 0, "null or > 0")
-    _float(cfg, "model.init_std", lambda v: v > 0, "> 0")
-    hidden = list(cfg.model.hidden)
-    if not hidden or any(int(h) < 1 for h in hidden):
-        _fail("model.hidden", hidden, "a non-empty list of positive layer widths")
-    if cfg.model.activation not in ("tanh", "relu", "elu"):
-        _fail("model.activation", cfg.model.activation, "'tanh', 'relu' or 'elu'")
+    fpb, batch = int(t.frames_per_batch), int(t.n_flows) * int(t.n_swimmers)
+    total, mb = int(t.total_frames), int(t.minibatch_size)
+    n_mb = fpb // mb if t.minibatches_per_epoch is None else int(t.minibatches_per_epoch)
     return TrainPlan(
-        params=params,
-        n_flows=n_flows,
-        n_swimmers=n_swimmers,
+        params=cfg.params,
+        n_flows=int(t.n_flows),
+        n_swimmers=int(t.n_swimmers),
         frames_per_batch=fpb,
         rollout_steps=fpb // batch,
         n_updates=total // fpb,
         total_frames=(total // fpb) * fpb,
         minibatch_size=mb,
         minibatches_per_epoch=n_mb,
-        epochs=epochs,
-        reward_scale=scale,
-        eval_every=eval_every,
+        epochs=int(t.epochs),
+        reward_scale=None if t.reward_scale is None else float(t.reward_scale),
+        eval_every=int(t.eval_every),
         eval_seed=int(cfg.seed) + EVAL_SEED_OFFSET,
         train_seed=training_seed(int(cfg.seed)),
     )

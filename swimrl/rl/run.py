@@ -8,27 +8,26 @@ Rules for the run directory (checked before any compute):
 * ``checkpoints/last.pt`` exists: error unless ``resume=true`` (continue) or
   ``overwrite=true`` (start again). ``resume=true`` without a checkpoint starts fresh, so a
   sweep can always be (re)launched with ``resume=true``;
-* a resumed run must have the same config as the checkpoint, except for the runtime keys
-  in :data:`RESUME_FREE_KEYS` and the ``eval.*`` / periodic evaluation sizes.
+* a resumed run must have the same config as the checkpoint (whose renamed keys are first
+  moved to their current names, :func:`~swimrl.rl.checkpoint.upgrade_config`), except for
+  the runtime keys in :data:`RESUME_FREE_KEYS` and the ``eval.*`` / periodic evaluation
+  sizes.
 """
 
 from __future__ import annotations
 
-import copy
-import json
 import logging
 import shutil
+from dataclasses import replace
 from pathlib import Path
 
-from omegaconf import DictConfig, OmegaConf, open_dict
-
-from swimrl.builders import setup_runtime
-from swimrl.config import ConfigError
-from swimrl.evaluate import summary_line, write_metrics
-from swimrl.rl.checkpoint import checkpoint_path, load_file
-from swimrl.rl.plan import validate_train_cfg
+from swimrl.errors import ConfigError
+from swimrl.evaluation.compare import CompareConfig, compare, strategy_variants
+from swimrl.evaluation.records import flatten, summary_line, write_comparison, write_json
+from swimrl.policies.files import checkpoint_path, load_file
+from swimrl.rl.checkpoint import upgrade_config
+from swimrl.rl.plan import TrainConfig, make_plan
 from swimrl.rl.trainer import PPOTrainer
-from swimrl.table import flatten
 
 log = logging.getLogger(__name__)
 
@@ -73,7 +72,7 @@ def clean_run_dir(out: Path) -> None:
         (out / name).unlink(missing_ok=True)
 
 
-def prepare_run_dir(cfg: DictConfig, out: Path) -> bool:
+def prepare_run_dir(cfg: TrainConfig, out: Path) -> bool:
     """Apply the run-directory rules; returns True when a checkpoint is to be resumed."""
     metrics, ckpt = out / "metrics.json", checkpoint_path(out)
     if metrics.exists() and not cfg.overwrite:
@@ -92,19 +91,16 @@ def prepare_run_dir(cfg: DictConfig, out: Path) -> bool:
     return ckpt.exists()
 
 
-def train(cfg: DictConfig, out: Path) -> dict | None:
+def train(cfg: TrainConfig, out: Path) -> dict | None:
     """Train (or resume) in ``out``; returns the final metrics, or None if stopped early."""
     out = Path(out)
-    plan = validate_train_cfg(cfg)
-    if not isinstance(cfg.resume, bool) or not isinstance(cfg.overwrite, bool):
-        raise ConfigError(
-            f"resume={cfg.resume!r}, overwrite={cfg.overwrite!r} are invalid: allowed true/false"
-        )
-    device, dtype = setup_runtime(cfg)
+    plan = make_plan(cfg)
+    cfg.runtime.apply()
+    device, dtype = cfg.runtime.device, cfg.runtime.dtype
     resuming = prepare_run_dir(cfg, out)
     if resuming:
-        old = load_file(checkpoint_path(out))["config"]
-        diffs = config_differences(old, OmegaConf.to_container(cfg, resolve=True))
+        old = upgrade_config(load_file(checkpoint_path(out))["config"])
+        diffs = config_differences(old, cfg.record)
         if diffs:
             raise ConfigError(
                 f"resume=true with a config that differs from {checkpoint_path(out)}: "
@@ -147,7 +143,7 @@ def train(cfg: DictConfig, out: Path) -> dict | None:
             )
             return None
         trainer.save_policy()
-        metrics = trainer.evaluate(cfg)
+        metrics = trainer.evaluate(cfg.evaluation)
     finally:
         trainer.close()
     metrics["policy"] = str(out)
@@ -160,33 +156,26 @@ def train(cfg: DictConfig, out: Path) -> dict | None:
         "eval_seed": plan.eval_seed,
         "train_seed": plan.train_seed,
     }
-    write_metrics(metrics, out, overwrite=bool(cfg.overwrite))
+    write_json(metrics, out / "metrics.json", overwrite=bool(cfg.overwrite))
     print(summary_line(metrics), flush=True)
-    if cfg.train.get("compare_baselines", False):
+    if cfg.train.compare_baselines:
         compare_with_baselines(cfg, out, plan.eval_seed)
     return metrics
 
 
-def compare_with_baselines(cfg: DictConfig, out: Path, seed: int) -> dict:
+def compare_with_baselines(cfg: TrainConfig, out: Path, seed: int) -> dict:
     """STO, naive (``Lambda = 0.98``) and the trained policy on the same held-out flows.
 
     Exactly ``swimrl-compare 'compare.strategies=[sto,naive,policy]' compare.policies=[out]
     seed=<eval seed>`` with the run's final-evaluation sizes; writes ``comparison.json`` and
     ``comparison.md`` into the run directory and prints the table (ratios to STO, paired).
     """
-    from swimrl.compare import compare, write_comparison
-
-    c = copy.deepcopy(cfg)
-    with open_dict(c):
-        c.seed = int(seed)
-        c.compare = {"strategies": ["sto", "naive", "policy"], "naive_shape_factors": [0.98],
-                     "policies": [str(out)], "minimal": {"c1": 1.0, "c2": 0.0, "c3": 0.0,
-                                                         "c4": 0.0}}
-    record = compare(c)
-    write_comparison(record, Path(out))
-    return record
-
-
-def read_metrics(out: Path) -> dict:
-    """The ``metrics.json`` of a finished run."""
-    return json.loads((Path(out) / "metrics.json").read_text())
+    settings = {"strategies": ["sto", "naive", "policy"], "naive_shape_factors": [0.98],
+                "policies": [str(out)], "minimal": {"c1": 1.0, "c2": 0.0, "c3": 0.0, "c4": 0.0}}
+    record = {**cfg.record, "seed": int(seed), "compare": settings}
+    setup = replace(cfg.evaluation, seed=int(seed), record=record)
+    variants = strategy_variants(settings["strategies"], settings["naive_shape_factors"],
+                                 tuple(settings["minimal"].values()), settings["policies"])
+    result = compare(CompareConfig(setup, variants))
+    print(write_comparison(result, Path(out)), flush=True)
+    return result

@@ -12,7 +12,7 @@ One *update* ``u``:
 4. both learning rates step down linearly (``make_schedulers``).
 
 Periodic deterministic evaluations (``Lambda = Lambda_max tanh(mu)``) on held-out flows use
-:func:`swimrl.evaluate.evaluate` (``seed + EVAL_SEED_OFFSET``, the same flows every time,
+:func:`swimrl.evaluation.rollout.evaluate` (``seed + EVAL_SEED_OFFSET``, the same flows every time,
 so successive points share their randomness); update 0 is the initial policy.
 
 Resume: the state after an update is checkpointed atomically; ``resume=true`` reloads it
@@ -25,31 +25,22 @@ discarded, never counted twice. Finished updates are never redone.
 
 from __future__ import annotations
 
-import copy
 import logging
 import math
 import time
+from dataclasses import replace
 from pathlib import Path
 
 import torch
-from omegaconf import DictConfig, OmegaConf, open_dict
 from tensordict import TensorDict
 from tqdm.auto import tqdm
 
-from swimrl.evaluate import evaluate
+from swimrl.evaluation.rollout import EvalSetup, evaluate
+from swimrl.policies.files import checkpoint_path, load_file, policy_meta, policy_path, save_policy
+from swimrl.policies.networks import deterministic_actor, log_std
 from swimrl.rl import builders as rlb
-from swimrl.rl.checkpoint import (
-    capture_rng,
-    checkpoint_path,
-    load_file,
-    policy_meta,
-    policy_path,
-    restore_rng,
-    save_checkpoint,
-    save_policy,
-)
-from swimrl.rl.models import deterministic_actor, log_std
-from swimrl.rl.plan import TrainPlan
+from swimrl.rl.checkpoint import capture_rng, restore_rng, save_checkpoint
+from swimrl.rl.plan import TrainConfig, TrainPlan
 
 log = logging.getLogger(__name__)
 
@@ -69,23 +60,23 @@ LOSS_LOG_KEYS = (
 class PPOTrainer:
     """Owns env, networks, loss, optimisers and counters of one training run."""
 
-    def __init__(self, cfg: DictConfig, plan: TrainPlan, run_dir: Path, device, dtype):
+    def __init__(self, cfg: TrainConfig, plan: TrainPlan, run_dir: Path, device, dtype):
         self.cfg, self.plan, self.run_dir = cfg, plan, Path(run_dir)
         self.device, self.dtype = device, dtype
         params = plan.params
         torch.manual_seed(int(cfg.seed))  # network init, action sampling, minibatch order
-        self.env = rlb.make_env(cfg, plan, device, dtype)
+        self.env = rlb.make_env(cfg, plan)
         self.swimmer_env = rlb.base_env(self.env)
         self.reward_scale = rlb.reward_scale_of(self.env)
-        self.actor = rlb.make_actor(cfg, params, device, dtype)
-        self.critic = rlb.make_critic(cfg, params, device, dtype)
-        self.policy = deterministic_actor(self.actor, params.shape_factor_max)
+        self.actor = rlb.make_actor(cfg, self.env, device, dtype)
+        self.critic = rlb.make_critic(cfg, self.env, device, dtype)
+        self.policy = deterministic_actor(self.actor)
         self.loss, self.gae = rlb.make_loss(cfg, self.actor, self.critic)
         self.optimizers = rlb.make_optimizers(cfg, self.actor, self.critic)
         self.schedulers = rlb.make_schedulers(cfg, self.optimizers, plan.n_updates)
         self.counters = {"frames": 0, "updates": 0, "wall_s": 0.0}
-        self.meta = policy_meta(cfg, params)
-        self.config = OmegaConf.to_container(cfg, resolve=True)
+        self.meta = policy_meta(params, cfg.model, str(dtype).replace("torch.", ""))
+        self.config = cfg.record
         self.logger = None
         self.last_eval: dict | None = None
         self.last_train_r_hat: float | None = None
@@ -139,21 +130,13 @@ class PPOTrainer:
         )
 
     # -- evaluation ---------------------------------------------------------------------------
-    def eval_cfg(self, n_flows: int, n_swimmers: int) -> DictConfig:
-        """The run config with an evaluation of ``n_flows x n_swimmers`` (no progress bar)."""
-        c = copy.deepcopy(self.cfg)
-        with open_dict(c):
-            c.eval.n_flows = int(n_flows)
-            c.eval.n_swimmers = int(n_swimmers)
-            c.eval.flows_per_batch = min(int(c.eval.flows_per_batch), int(n_flows))
-            c.eval.progress = False
-        return c
-
-    def evaluate(self, cfg_eval: DictConfig | None = None) -> dict:
-        """Deterministic policy on held-out flows (``seed + EVAL_SEED_OFFSET``)."""
-        if cfg_eval is None:
-            cfg_eval = self.eval_cfg(self.cfg.train.eval_flows, self.cfg.train.eval_swimmers)
-        return evaluate(cfg_eval, actor=self.policy, seed=self.plan.eval_seed)
+    def evaluate(self, setup: EvalSetup | None = None) -> dict:
+        """Deterministic policy on held-out flows (``seed + EVAL_SEED_OFFSET``); default: the
+        periodic evaluation's ``train.eval_flows x train.eval_swimmers``."""
+        if setup is None:
+            t = self.cfg.train
+            setup = self.cfg.evaluation.resized(t.eval_flows, t.eval_swimmers)
+        return evaluate(replace(setup, seed=self.plan.eval_seed), self.policy, "policy")
 
     def _periodic_eval(self) -> None:
         t0 = time.perf_counter()

@@ -8,13 +8,14 @@ Vorticity form on the bi-periodic box ``[0, L)^2`` (``L = 2 pi``), batched over 
 Modules (FourierFlows.jl style): :mod:`.grid` (rfft2 wavenumbers, 2/3 mask), :mod:`.params`,
 :mod:`.state` (``omega_hat`` and the kinematics, :func:`flow_channels`), :mod:`.equation`
 (``L(k)`` and the advection term), :mod:`.forcing`, :mod:`.stepper` (ETDRK4, :class:`DNS`),
-:mod:`.diagnostics`, :mod:`.store` (zarr writer, :class:`DNSStore` reader), :mod:`.cli`
-(``swimrl-dns``), :mod:`.plots`. See ``docs/dns.md``.
+:mod:`.diagnostics`, :mod:`.spinup` (spin-up and measured scales), :mod:`.store` (zarr layout and
+writer), :mod:`.run` (the run behind ``swimrl-dns``). The reader of a stored run is
+:class:`swimrl.flows.sources.DNSStore`. See ``docs/dns.md``.
 """
 
 from swimrl.flows.dns.forcing import SteadyForcing, StochasticForcing
 from swimrl.flows.dns.grid import SpectralGrid, dealias_cutoff
-from swimrl.flows.dns.params import DNSParamError, DNSParams
+from swimrl.flows.dns.params import DNSParams
 from swimrl.flows.dns.state import (
     DNSState,
     flow_channels,
@@ -23,15 +24,12 @@ from swimrl.flows.dns.state import (
     zero_state,
 )
 from swimrl.flows.dns.stepper import DNS, CFLError
-from swimrl.flows.dns.store import DNSStore
 
 __all__ = [
     "DNS",
     "CFLError",
-    "DNSParamError",
     "DNSParams",
     "DNSState",
-    "DNSStore",
     "SpectralGrid",
     "SteadyForcing",
     "StochasticForcing",

@@ -123,22 +123,11 @@ def u_rms(grid: SpectralGrid, omega_hat: torch.Tensor) -> torch.Tensor:
     return (_sum(grid, 1.0, ux) + _sum(grid, 1.0, uy)).sqrt()
 
 
-def gradient_norm2(grid: SpectralGrid, omega_hat: torch.Tensor) -> torch.Tensor:
-    """``<d_i u_j d_i u_j> = sum_{ij} sum w |k_i u_j_hat|^2 / N^4`` (``= <omega^2>`` in 2D)."""
-    ux, uy = velocity_hat(grid, omega_hat.to(torch.complex128))
-    k2x, k2y = grid.kx.double() ** 2, grid.ky.double() ** 2
-    return sum(_sum(grid, k2x, u) + _sum(grid, k2y, u) for u in (ux, uy))
-
-
 def tau_k(grid: SpectralGrid, omega_hat: torch.Tensor) -> torch.Tensor:
-    """Kolmogorov time ``tau_K = <d_i u_j d_i u_j>^{-1/2}`` (paper Sec. II B)."""
-    return gradient_norm2(grid, omega_hat) ** -0.5
-
-
-def kmax_eta(grid: SpectralGrid, params: DNSParams, omega_hat: torch.Tensor) -> torch.Tensor:
-    """Resolution ``k_max l_nu``, ``l_nu = nu^{1/2} eta^{-1/6}`` (Kraichnan), ``eta = D_Z``."""
-    eta = enstrophy_dissipation_rate(grid, params, omega_hat)
-    return grid.k_max * params.nu**0.5 * eta ** (-1 / 6)
+    """Kolmogorov time ``tau_K = <d_i u_j d_i u_j>^{-1/2} = <omega^2>^{-1/2} = (2Z)^{-1/2}``
+    (paper Sec. II B; the middle equality holds for 2D incompressible flow on a periodic box).
+    """
+    return (2 * enstrophy(grid, omega_hat)) ** -0.5
 
 
 def _shells(grid: SpectralGrid) -> tuple[torch.Tensor, torch.Tensor, int]:

@@ -1,9 +1,9 @@
 """Spectral grid of the DNS: real-FFT wavenumbers and the 2/3 de-aliasing mask.
 
 Physical grid: ``N x N`` nodes ``x_j = j L/N``, ``j = 0..N-1``, arrays indexed ``[..., iy, ix]``
-(the convention of :mod:`swimrl.flows.fields`). Spectral grid: ``torch.fft.rfft2`` layout,
-``(N, N//2 + 1)`` indexed ``[..., m_y, m_x]`` with ``m_y`` in FFT order ``0..N/2-1, -N/2..-1``
-and ``m_x = 0..N/2``; the wavenumbers are ``k = 2 pi m / L``.
+(the node grid :class:`swimrl.flows.grid.PeriodicGrid` shared with every flow). Spectral
+grid: ``torch.fft.rfft2`` layout, ``(N, N//2 + 1)`` indexed ``[..., m_y, m_x]`` with ``m_y`` in
+FFT order ``0..N/2-1, -N/2..-1`` and ``m_x = 0..N/2``; the wavenumbers are ``k = 2 pi m / L``.
 
 De-aliasing (Orszag's 2/3 rule, square truncation): the retained modes are exactly
 
@@ -21,6 +21,8 @@ import math
 from dataclasses import dataclass, field
 
 import torch
+
+from swimrl.flows.grid import PeriodicGrid
 
 
 def dealias_cutoff(n: int) -> int:
@@ -48,12 +50,12 @@ class SpectralGrid:
     inv_k2: torch.Tensor = field(init=False, repr=False)
     mask: torch.Tensor = field(init=False, repr=False)
     weight: torch.Tensor = field(init=False, repr=False)
+    nodes: PeriodicGrid = field(init=False, repr=False)
 
     def __post_init__(self) -> None:
-        if self.n < 8 or self.n % 2:
+        if self.n < 8:
             raise ValueError(f"grid n={self.n} out of range: must be an even integer >= 8")
-        if not self.length > 0:
-            raise ValueError(f"grid length={self.length} out of range: must be > 0")
+        self.nodes = PeriodicGrid(self.n, self.length)  # checks n even, length > 0
         self.device = torch.device(self.device)
         n, dev, dt = self.n, self.device, self.dtype
         my = torch.fft.fftfreq(n, d=1.0 / n, dtype=torch.float64)  # integers in FFT order
@@ -76,8 +78,8 @@ class SpectralGrid:
     # -- geometry -------------------------------------------------------------------------
     @property
     def spacing(self) -> float:
-        """Grid spacing ``dx = L / N``."""
-        return self.length / self.n
+        """Grid spacing ``dx = L / N`` (of :attr:`nodes`)."""
+        return self.nodes.spacing
 
     @property
     def cutoff(self) -> int:
@@ -101,7 +103,7 @@ class SpectralGrid:
 
     def coords(self) -> torch.Tensor:
         """Node coordinates ``x_j = j L / N`` (1D, float64, CPU)."""
-        return torch.arange(self.n, dtype=torch.float64) * self.spacing
+        return self.nodes.coords()
 
     def k_magnitude(self) -> torch.Tensor:
         """``|k| = (k_x^2 + k_y^2)^{1/2}`` on the spectral grid."""

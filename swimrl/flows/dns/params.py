@@ -5,7 +5,8 @@
 with ``nu`` the viscosity, ``alpha`` the hypo-friction coefficient and ``h = hypo_power``
 (``h = 0`` is the paper's linear friction ``-alpha u``), ``f`` the white-in-time forcing that
 injects energy at the mean rate ``epsilon``, peaked at ``|k| = k_f`` with Gaussian width
-``forcing_width``. See ``docs/dns.md`` for the default values and their derivation.
+``forcing_width``. The defaults are the values of ``conf/solver/dns.yaml`` (a test keeps them
+equal); ``docs/dns.md`` derives them.
 """
 
 from __future__ import annotations
@@ -15,13 +16,10 @@ from dataclasses import asdict, dataclass, fields
 
 import torch
 
+from swimrl.errors import ConfigError
 from swimrl.flows.dns.grid import dealias_cutoff
 
 DTYPES: dict[str, torch.dtype] = {"float32": torch.float32, "float64": torch.float64}
-
-
-class DNSParamError(ValueError):
-    """A DNS parameter is out of its allowed range (one-line message naming key and range)."""
 
 
 @dataclass(frozen=True)
@@ -44,15 +42,15 @@ class DNSParams:
     epsilon: float = 1.0
     k_f: float = 3.0
     forcing_width: float = 0.5
-    dt: float = 1.0e-3
+    dt: float = 7.5e-4
     dtype: str = "float32"
     device: str = "cpu"
     cfl_max: float = 1.0
     cfl_every: int = 1
 
     def __post_init__(self) -> None:
-        def bad(key: str, rng: str) -> DNSParamError:
-            return DNSParamError(f"dns.{key}={getattr(self, key)!r} out of range: must be {rng}")
+        def bad(key: str, rng: str) -> ConfigError:
+            return ConfigError(f"dns.{key}={getattr(self, key)!r} is invalid: allowed {rng}")
 
         def num(key: str) -> float:
             v = getattr(self, key)
@@ -100,11 +98,6 @@ class DNSParams:
         """Real torch dtype of the run."""
         return DTYPES[self.dtype]
 
-    @property
-    def torch_device(self) -> torch.device:
-        """Torch device of the run."""
-        return torch.device(self.device)
-
     def replace(self, **changes) -> DNSParams:
         """A validated copy with ``changes`` applied."""
         return DNSParams(**{**asdict(self), **changes})
@@ -120,21 +113,5 @@ class DNSParams:
         data = dict(cfg)
         unknown = sorted(set(data) - names)
         if unknown:
-            raise DNSParamError(f"dns.{unknown[0]} is not a DNS parameter: allowed {sorted(names)}")
+            raise ConfigError(f"dns.{unknown[0]} is not a DNS parameter: allowed {sorted(names)}")
         return cls(**data)
-
-    # -- physical scales derived from the parameters (Kraichnan 1967 / Boffetta & Ecke 2012) --
-    @property
-    def enstrophy_injection_estimate(self) -> float:
-        """``eta_in ~ epsilon k_f^2`` (thin-shell estimate)."""
-        return self.epsilon * self.k_f**2
-
-    def resolution_estimate(self, eta: float | None = None) -> float:
-        """``k_max l_nu`` with ``l_nu = nu^{1/2} eta^{-1/6}`` the enstrophy-dissipation scale.
-
-        ``eta`` defaults to :attr:`enstrophy_injection_estimate` (an upper bound on the
-        enstrophy flux, hence a lower bound on ``k_max l_nu``).
-        """
-        eta = self.enstrophy_injection_estimate if eta is None else eta
-        k_max = 2 * math.pi * dealias_cutoff(self.n) / self.length
-        return k_max * self.nu**0.5 * eta ** (-1 / 6)

@@ -1,4 +1,4 @@
-"""Zarr store of a DNS run: writer (resumable) and :class:`DNSStore` reader.
+"""Zarr store of a DNS run: its layout and the resumable writer used by ``swimrl-dns``.
 
 Layout (zarr format 3, consolidated metadata, readable with ``xarray.open_zarr(path)``)::
 
@@ -29,11 +29,9 @@ import numpy as np
 import torch
 import zarr
 
-from swimrl.flows.dns.grid import SpectralGrid, dealias_cutoff
-from swimrl.flows.dns.state import flow_channels
+from swimrl.flows.dns.grid import dealias_cutoff
 
 FORMAT_VERSION = 1
-CHANNEL_NAMES = ("u_x", "u_y", "S_xx", "S_xy", "omega")
 CHANNEL_UNITS = ("L/T", "L/T", "1/T", "1/T", "1/T")
 DIAG_FIELDS = ("t", "energy", "enstrophy", "energy_dissipation", "energy_friction",
                "enstrophy_dissipation", "enstrophy_friction")
@@ -249,60 +247,3 @@ def _same(a: Any, b: Any) -> bool:
     if isinstance(a, float | int) and isinstance(b, float | int):
         return math.isclose(float(a), float(b), rel_tol=1e-12, abs_tol=0.0)
     return a == b
-
-
-class DNSStore:
-    """Reader of a stored DNS run (what the replay flow backend uses).
-
-    ``DNSStore(path)`` exposes ``n_times``, ``dt_store``, ``u_rms``, ``tau_k``, ``length``,
-    ``n``, ``times``, ``attrs`` and :meth:`channels`.
-    """
-
-    def __init__(self, path: str | Path, device: torch.device | str = "cpu"):
-        self.path = Path(path)
-        if not self.path.exists():
-            raise FileNotFoundError(f"no DNS store at {self.path}")
-        self.group = zarr.open_group(str(self.path), mode="r")
-        self.attrs: dict[str, Any] = dict(self.group.attrs)
-        if "n" not in self.attrs or "n_written" not in self.attrs:
-            raise ValueError(f"{self.path} is not a swimrl DNS store (missing attrs n/n_written)")
-        self.device = torch.device(device)
-        self.n = int(self.attrs["n"])
-        self.length = float(self.attrs["length"])
-        self.n_times = int(self.attrs["n_written"])
-        self.dt_store = float(self.attrs.get("dt_store", math.nan))
-        self.u_rms = float(self.attrs.get("u_rms", math.nan))
-        self.tau_k = float(self.attrs.get("tau_k", math.nan))
-        self.channel_names = tuple(self.attrs.get("channel_names", CHANNEL_NAMES))
-        self._grid = SpectralGrid(self.n, self.length, self.device, torch.float32)
-
-    @property
-    def complete(self) -> bool:
-        """Whether the run finished."""
-        return self.attrs.get("status") == "complete"
-
-    @property
-    def times(self) -> np.ndarray:
-        """Snapshot times ``(n_times,)``."""
-        return np.asarray(self.group["time"][: self.n_times])
-
-    def _check_range(self, i0: int, i1: int) -> None:
-        if not 0 <= i0 <= i1 <= self.n_times:
-            raise IndexError(f"snapshot range [{i0}, {i1}) outside [0, {self.n_times}]")
-
-    def omega_hat(self, i0: int, i1: int, dtype: torch.dtype = torch.complex64) -> torch.Tensor:
-        """Unnormalised ``rfft2(omega)`` of snapshots ``i0..i1-1``, ``(i1-i0, N, N//2+1)``."""
-        self._check_range(i0, i1)
-        c = torch.from_numpy(np.asarray(self.group["omega_hat"][i0:i1])).to(self.device)
-        return unpack(c.to(dtype) * float(self.n) ** 2, self.n)
-
-    def channels(self, i0: int, i1: int) -> torch.Tensor:
-        """``(u_x, u_y, S_xx, S_xy, omega)`` at the nodes, ``(i1-i0, N, N, 5)`` float32."""
-        return flow_channels(self.omega_hat(i0, i1), self._grid)
-
-    def __len__(self) -> int:
-        return self.n_times
-
-    def __repr__(self) -> str:
-        return (f"DNSStore({str(self.path)!r}, n={self.n}, n_times={self.n_times}, "
-                f"dt_store={self.dt_store:.4g}, u_rms={self.u_rms:.4g}, tau_k={self.tau_k:.4g})")

@@ -14,30 +14,14 @@ channels at the points (bilinear, :mod:`swimrl.flows.interpolation`) and contrac
 
 from __future__ import annotations
 
-from dataclasses import dataclass
-
 import torch
 
 from swimrl.flows.grid import PeriodicGrid
 from swimrl.flows.interpolation import bilinear_periodic
 
+#: The five flow channels every flow provides, in this order.
 CHANNELS: tuple[str, ...] = ("u_x", "u_y", "S_xx", "S_xy", "omega")
 N_CHANNELS = len(CHANNELS)
-
-
-@dataclass
-class FlowSample:
-    """Flow seen at points: velocity ``u`` (..., 2), strain ``S_xx``, ``S_xy`` and vorticity."""
-
-    u: torch.Tensor
-    s_xx: torch.Tensor
-    s_xy: torch.Tensor
-    omega: torch.Tensor
-
-    @classmethod
-    def from_channels(cls, q: torch.Tensor) -> FlowSample:
-        """Split a ``(..., 5)`` tensor in :data:`CHANNELS` order."""
-        return cls(u=q[..., 0:2], s_xx=q[..., 2], s_xy=q[..., 3], omega=q[..., 4])
 
 
 def gradient_norm2(q: torch.Tensor) -> torch.Tensor:

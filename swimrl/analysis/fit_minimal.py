@@ -1,4 +1,4 @@
-r"""``swimrl-fit-minimal``: fit the paper's minimal model (``eq:fit``) to a strategy.
+r"""Fit of the paper's minimal model (``eq:fit``) to a strategy (``swimrl-fit-minimal``).
 
 The strategy (usually a trained policy, ``strategy=policy policy=...``) is run on fresh
 flows; every ``fit.sample_every`` decisions the five signals ``s`` and the action ``Lambda``
@@ -16,34 +16,39 @@ gets ``fit.json`` with ``c1..c4``, their standard errors, the coefficient of det
 
 from __future__ import annotations
 
-import json
-import logging
+from dataclasses import dataclass
 
-import hydra
 import numpy as np
 import torch
-from omegaconf import DictConfig, OmegaConf
 from scipy.optimize import curve_fit
 
-from swimrl.builders import build_env, setup_runtime
-from swimrl.evaluate import chunk_seed, load_actor, validate_eval_cfg
-from swimrl.paths import CONF_DIR, run_dir
-from swimrl.strategies import minimal_model
-
-log = logging.getLogger(__name__)
+from swimrl.env import SwimmerEnv
+from swimrl.errors import as_int
+from swimrl.evaluation.rollout import EvalConfig, actor_for, chunk_seed, run_episodes
+from swimrl.policies.baselines import build_strategy, minimal_model
 
 
-@torch.no_grad()
+@dataclass(frozen=True)
+class FitConfig:
+    """``swimrl-fit-minimal``: the strategy to sample and the decisions between samples."""
+
+    eval: EvalConfig
+    sample_every: int = 20
+
+    def __post_init__(self) -> None:
+        as_int("fit.sample_every", self.sample_every)
+
+
 def sample_strategy(env, actor, sample_every: int) -> tuple[np.ndarray, np.ndarray]:
     """Signals ``(K, 5)`` and actions ``(K,)`` seen along one episode of every swimmer."""
-    td = env.reset()
     sig, act = [], []
-    for i in range(env.params.n_decisions):
-        td = actor(td)
+
+    def record(i: int, td) -> None:
         if i % sample_every == 0:
             sig.append(td.get("signals").reshape(-1, 5).double().cpu())
             act.append(td.get("action").reshape(-1).double().cpu())
-        td = env.step(td).get("next")
+
+    run_episodes(env, actor, on_decision=record)
     return torch.cat(sig).numpy(), torch.cat(act).numpy()
 
 
@@ -60,28 +65,22 @@ def fit_minimal(signals: np.ndarray, actions: np.ndarray, lam_max: float, p0=(1.
     return coeffs, np.sqrt(np.diag(cov)), float(r2)
 
 
-def run_fit(cfg: DictConfig) -> dict:
-    """Sample the configured strategy and fit the minimal model (validation first)."""
-    params = validate_eval_cfg(cfg)
-    every = int(cfg.fit.sample_every)
-    if every < 1:
-        raise ValueError(f"fit.sample_every={every} is invalid: allowed integer >= 1")
-    device, dtype = setup_runtime(cfg)
-    actor = load_actor(cfg, params)
-    env = build_env(
-        cfg,
-        int(cfg.eval.n_flows),
-        int(cfg.eval.n_swimmers),
-        chunk_seed(int(cfg.seed), 0),
-        device,
-        dtype,
-    )
-    signals, actions = sample_strategy(env, actor.to(device), every)
-    coeffs, err, r2 = fit_minimal(signals, actions, params.shape_factor_max)
+def run_fit(cfg: FitConfig) -> dict:
+    """Sample the configured strategy and fit the minimal model."""
+    ev, setup = cfg.eval, cfg.eval.setup
+    setup.runtime.apply()
+    actor = actor_for(ev.strategy, ev.policy, setup.params)
+    sizes = setup.sizes
+    env = SwimmerEnv.build(setup.flow, setup.params, setup.runtime, sizes.n_flows,
+                           sizes.n_swimmers, chunk_seed(setup.seed, 0))
+    if not isinstance(actor, torch.nn.Module):
+        actor = build_strategy(actor, env.action_spec_unbatched)
+    signals, actions = sample_strategy(env, actor.to(setup.runtime.device), cfg.sample_every)
+    coeffs, err, r2 = fit_minimal(signals, actions, env.params.shape_factor_max)
     names = ("c1", "c2", "c3", "c4")
     c = {k: float(v) for k, v in zip(names, coeffs, strict=True)}
-    flow = cfg.flow
-    knob = f"flow.kubo={flow.kubo:g}" if flow.name == "stochastic" else f"flow={flow.name}"
+    flow = setup.record["flow"]
+    knob = f"flow.kubo={flow['kubo']:g}" if flow["name"] == "stochastic" else f"flow={flow['name']}"
     return {
         "coefficients": c,
         "stderr": {k: float(v) for k, v in zip(names, err, strict=True)},
@@ -90,26 +89,5 @@ def run_fit(cfg: DictConfig) -> dict:
         "evaluate_with": "swimrl-eval strategy=minimal "
         + " ".join(f"strategy.{k}={v:.4g}" for k, v in c.items())
         + f" {knob}",
-        "config": OmegaConf.to_container(cfg, resolve=True),
+        "config": setup.record,
     }
-
-
-@hydra.main(config_path=str(CONF_DIR), config_name="fit_minimal", version_base="1.3")
-def main(cfg: DictConfig) -> dict:
-    out = run_dir() / "fit.json"
-    if out.exists() and not cfg.overwrite:
-        raise FileExistsError(f"{out} exists; pass overwrite=true to replace it")
-    record = run_fit(cfg)
-    out.write_text(json.dumps(record, indent=2))
-    c, e = record["coefficients"], record["stderr"]
-    print(
-        "minimal model fit: "
-        + ", ".join(f"{k} = {c[k]:.4f} +- {e[k]:.4f}" for k in c)
-        + f"; R^2 = {record['r2']:.3f} over {record['n_samples']} samples\n"
-        + record["evaluate_with"]
-    )
-    return record
-
-
-if __name__ == "__main__":
-    main()

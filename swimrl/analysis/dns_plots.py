@@ -1,6 +1,6 @@
 """Figures of a stored DNS run: spectrum, PDFs, time series and a vorticity snapshot.
 
-``python -m swimrl.flows.dns.plots <store> [--out docs/img] [--snapshots 50]`` writes
+``swimrl-dns-plots <store> [--out docs/img] [--snapshots 50]`` writes
 
 * ``dns_spectrum.png``: time-averaged ``E(k)`` with a ``k^-3`` reference line and the fitted
   slope, and the enstrophy flux ``Pi_Z(k)`` normalised by the viscous enstrophy dissipation;
@@ -14,8 +14,6 @@ and prints a JSON summary (slope, moments, ``u_rms``, ``tau_K``, resolution ``k_
 
 from __future__ import annotations
 
-import argparse
-import json
 import math
 from pathlib import Path
 
@@ -30,7 +28,7 @@ import zarr  # noqa: E402
 from swimrl.flows.dns import diagnostics as dg  # noqa: E402
 from swimrl.flows.dns.grid import SpectralGrid  # noqa: E402
 from swimrl.flows.dns.params import DNSParams  # noqa: E402
-from swimrl.flows.dns.store import DNSStore  # noqa: E402
+from swimrl.flows.sources import DNSStore  # noqa: E402
 
 PDF_CHANNELS = {"omega": 4, "S_xx": 2, "S_xy": 3}
 COLOURS = {"omega": "tab:blue", "S_xx": "tab:green", "S_xy": "tab:red"}
@@ -207,22 +205,3 @@ def make_plots(path: str | Path, out_dir: str | Path = "docs/img", n_snapshots: 
             * eta ** (-1 / 6), "moments": stats, "snapshots_used": len(idx),
         "store_bytes": size,
     }
-
-
-def main(argv: list[str] | None = None) -> dict:
-    """``python -m swimrl.flows.dns.plots <store> [--out DIR] [--snapshots M]``."""
-    ap = argparse.ArgumentParser(description="Figures of a stored swimrl DNS run")
-    ap.add_argument("store")
-    ap.add_argument("--out", default="docs/img")
-    ap.add_argument("--snapshots", type=int, default=50, help="snapshots averaged (evenly spaced)")
-    ap.add_argument("--fit", type=float, nargs=2, default=(6.0, 40.0),
-                    help="k range of the spectral slope fit")
-    args = ap.parse_args(argv)
-    torch.set_num_threads(1)
-    summary = make_plots(args.store, args.out, args.snapshots, tuple(args.fit))
-    print(json.dumps(summary, indent=1))
-    return summary
-
-
-if __name__ == "__main__":
-    main()

@@ -9,7 +9,7 @@ the best policy with the same decision boundaries, i.e. training has not converg
 magnitude of ``mu``. This is a diagnostic, never the reported performance of a policy: the
 gain is chosen on the evaluation flows.
 
-    python -m swimrl.gain_scan policy=pretrained/ku10 flow.kubo=10 'gains=[1,2,3,5,10]'
+    swimrl-gain-scan policy=pretrained/ku10 flow.kubo=10 'gains=[1,2,3,5,10]'
 
 All gains are evaluated on the same flows and initial conditions (same ``seed``). Prints a
 Markdown table (``R_hat`` +- SEM, ratio to ``g = 1``).
@@ -18,13 +18,27 @@ Markdown table (``R_hat`` +- SEM, ratio to ``g = 1``).
 from __future__ import annotations
 
 import copy
+from dataclasses import dataclass
 
-import hydra
 import torch
-from omegaconf import DictConfig, open_dict
 
-from swimrl.evaluate import evaluate, load_actor, validate_eval_cfg
-from swimrl.paths import CONF_DIR
+from swimrl.errors import require
+from swimrl.evaluation.records import markdown_table
+from swimrl.evaluation.rollout import EvalSetup, evaluate
+from swimrl.policies.files import load_policy
+
+
+@dataclass(frozen=True)
+class GainScanConfig:
+    """The policy ``policy`` evaluated on ``setup`` with its mean scaled by each of ``gains``."""
+
+    setup: EvalSetup
+    policy: str
+    gains: tuple[float, ...]
+
+    def __post_init__(self) -> None:
+        require(bool(self.gains) and all(g >= 0 for g in self.gains), "gains", list(self.gains),
+                "a non-empty list of numbers >= 0")
 
 
 class _Gain(torch.nn.Module):
@@ -48,19 +62,12 @@ def with_gain(actor, gain: float):
     return out
 
 
-def gain_scan(cfg: DictConfig) -> list[dict]:
+def gain_scan(cfg: GainScanConfig) -> list[dict]:
     """``[{gain, R_hat_mean, R_hat_sem, per_flow}]`` for ``cfg.gains`` on common flows."""
-    gains = [float(g) for g in cfg.gains]
-    bad = [g for g in gains if not g >= 0]
-    if not gains or bad:
-        raise ValueError(f"gains={gains} is invalid: allowed a non-empty list of numbers >= 0")
-    with open_dict(cfg):
-        cfg.strategy = {"name": "policy"}
-    params = validate_eval_cfg(cfg)
-    actor = load_actor(cfg, params)
+    actor = load_policy(cfg.policy, cfg.setup.params)
     rows = []
-    for g in gains:
-        m = evaluate(cfg, actor=with_gain(actor, g))
+    for g in cfg.gains:
+        m = evaluate(cfg.setup, with_gain(actor, g), "policy")
         rows.append({"gain": g, **{k: m[k] for k in ("R_hat_mean", "R_hat_sem", "per_flow")}})
     return rows
 
@@ -68,18 +75,7 @@ def gain_scan(cfg: DictConfig) -> list[dict]:
 def markdown(rows: list[dict]) -> str:
     """The scan as a Markdown table with ratios to the first row's mean."""
     ref = rows[0]["R_hat_mean"]
-    lines = [f"| gain g | R_hat (mean +- SEM) | ratio to g = {rows[0]['gain']:g} |",
-             "|---|---|---|"]
-    for r in rows:
-        lines.append(f"| {r['gain']:g} | {r['R_hat_mean']:.4f} +- {r['R_hat_sem']:.4f} | "
-                     f"{r['R_hat_mean'] / ref:.3f} |")
-    return "\n".join(lines)
-
-
-@hydra.main(config_path=str(CONF_DIR), config_name="gain_scan", version_base="1.3")
-def main(cfg: DictConfig) -> None:
-    print(markdown(gain_scan(cfg)))
-
-
-if __name__ == "__main__":
-    main()
+    cells = [[f"{r['gain']:g}", f"{r['R_hat_mean']:.4f} +- {r['R_hat_sem']:.4f}",
+              f"{r['R_hat_mean'] / ref:.3f}"] for r in rows]
+    return markdown_table(["gain g", "R_hat (mean +- SEM)", f"ratio to g = {rows[0]['gain']:g}"],
+                          cells)

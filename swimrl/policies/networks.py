@@ -3,10 +3,12 @@ r"""Actor and critic networks (paper App. "Reinforcement learning algorithm").
 * Actor: a Gaussian in the pre-``tanh`` space, ``u ~ N(mu(s), sigma^2)``, with the mean
   ``mu(s)`` from a fully connected ``tanh`` MLP (2 x 64 by default) on the ``observation``
   key and a state-independent trainable ``sigma = exp(log_sigma)``; the action is
-  ``Lambda = Lambda_max tanh(u)`` (TorchRL ``TanhNormal`` with ``low = -Lambda_max``,
-  ``high = Lambda_max``), so that the probability ratio and the entropy of PPO include the
-  Jacobian of the ``tanh`` map. Evaluation is deterministic: ``sigma -> 0``, i.e.
-  ``Lambda = Lambda_max tanh(mu(s))`` (:class:`MeanPolicy`, or ``ExplorationType.DETERMINISTIC``).
+  ``Lambda = Lambda_max tanh(u)`` (TorchRL ``TanhNormal`` with ``low``, ``high`` read from the
+  environment's action spec ``[-Lambda_max, Lambda_max]``, as in TorchRL's
+  ``sota-implementations/ppo/utils_mujoco.py``), so that the probability ratio and the
+  entropy of PPO include the Jacobian of the ``tanh`` map. Evaluation is deterministic:
+  ``sigma -> 0``, i.e. ``Lambda = Lambda_max tanh(mu(s))`` (:class:`MeanPolicy`, or
+  ``ExplorationType.DETERMINISTIC``).
 * Critic: a ``ValueOperator`` ``V(s)`` on an MLP of the same shape, writing ``state_value``.
 
 Initialisation as in common PPO implementations: orthogonal weights (gain ``sqrt 2`` in the
@@ -18,14 +20,34 @@ from __future__ import annotations
 
 import math
 from collections.abc import Sequence
+from dataclasses import dataclass
 
 import torch
 from tensordict.nn import AddStateIndependentNormalScale, TensorDictModule
 from torch import nn
-from torchrl.data import Bounded
+from torchrl.data import Bounded, Composite
 from torchrl.modules import ProbabilisticActor, TanhNormal, ValueOperator
 
+from swimrl.errors import as_float, as_int, one_of, require
+
 ACTIVATIONS = {"tanh": nn.Tanh, "relu": nn.ReLU, "elu": nn.ELU}
+
+
+@dataclass(frozen=True)
+class ModelSpec:
+    """Shape of actor and critic (``model.*``): hidden widths, activation, initial ``sigma``."""
+
+    hidden: tuple[int, ...] = (64, 64)
+    activation: str = "tanh"
+    init_std: float = 1.0
+
+    def __post_init__(self) -> None:
+        require(len(self.hidden) > 0, "model.hidden", list(self.hidden),
+                "a non-empty list of positive layer widths")
+        for h in self.hidden:
+            as_int("model.hidden", h)
+        one_of("model.activation", self.activation, ACTIVATIONS)
+        as_float("model.init_std", self.init_std, lambda v: v > 0, "> 0")
 
 
 def make_mlp(
@@ -38,8 +60,6 @@ def make_mlp(
     dtype=torch.float32,
 ) -> nn.Sequential:
     """Fully connected ``n_in -> hidden... -> n_out`` network, orthogonal initialisation."""
-    if activation not in ACTIVATIONS:
-        raise ValueError(f"model.activation={activation!r} is invalid: allowed {list(ACTIVATIONS)}")
     layers: list[nn.Module] = []
     width = n_in
     for h in hidden:
@@ -55,9 +75,22 @@ def make_mlp(
     return nn.Sequential(*layers)
 
 
-def make_actor(
+def action_spec(shape_factor_max: float, device=None, dtype=torch.float32) -> Bounded:
+    """Unbatched action spec ``Lambda in [-Lambda_max, Lambda_max]``, shape ``(1,)``."""
+    lam = float(shape_factor_max)
+    return Bounded(low=-lam, high=lam, shape=(1,), device=device, dtype=dtype)
+
+
+def action_bounds(spec) -> tuple[float, float]:
+    """``(low, high)`` of a bounded one-dimensional action spec (or of an actor's spec)."""
+    if isinstance(spec, Composite):
+        spec = spec["action"]
+    return float(spec.space.low.reshape(-1)[0]), float(spec.space.high.reshape(-1)[0])
+
+
+def tanh_normal_actor(
     n_obs: int,
-    shape_factor_max: float,
+    spec: Bounded,
     hidden: Sequence[int] = (64, 64),
     activation: str = "tanh",
     init_std: float = 1.0,
@@ -66,11 +99,10 @@ def make_actor(
 ) -> ProbabilisticActor:
     """``ProbabilisticActor`` ``observation -> (loc, scale) -> TanhNormal -> action``.
 
-    Writes ``action`` (``Lambda`` in ``[-Lambda_max, Lambda_max]``) and ``action_log_prob``.
+    ``spec`` is the unbatched action spec of the environment (``Lambda`` in ``[low, high]``);
+    the ``TanhNormal`` bounds are read from it. Writes ``action`` and ``action_log_prob``.
     ``actor.module[0].module[0]`` is the mean network ``mu(s)`` (see :func:`mean_network`).
     """
-    if not init_std > 0:
-        raise ValueError(f"model.init_std={init_std} is invalid: allowed > 0")
     mean = make_mlp(n_obs, 1, hidden, activation, 0.01, device, dtype)
     scale = AddStateIndependentNormalScale(
         1, scale_mapping="exp", init_value=math.log(init_std), device=device
@@ -78,20 +110,19 @@ def make_actor(
     net = TensorDictModule(
         nn.Sequential(mean, scale), in_keys=["observation"], out_keys=["loc", "scale"]
     )
-    lam = float(shape_factor_max)
-    spec = Bounded(low=-lam, high=lam, shape=(1,), device=device, dtype=dtype)
+    low, high = action_bounds(spec)
     return ProbabilisticActor(
         net,
         in_keys=["loc", "scale"],
-        spec=spec,
+        spec=spec.to(device) if device is not None else spec,
         distribution_class=TanhNormal,
-        distribution_kwargs={"low": -lam, "high": lam},
+        distribution_kwargs={"low": low, "high": high},
         return_log_prob=True,
     )
 
 
 def mean_network(actor: ProbabilisticActor) -> nn.Sequential:
-    """The mean network ``mu(s)`` of an actor built by :func:`make_actor`."""
+    """The mean network ``mu(s)`` of an actor built by :func:`tanh_normal_actor`."""
     return actor.module[0].module[0]
 
 
@@ -100,7 +131,7 @@ def log_std(actor: ProbabilisticActor) -> torch.Tensor:
     return actor.module[0].module[1].state_independent_scale
 
 
-def make_critic(
+def value_critic(
     n_obs: int,
     hidden: Sequence[int] = (64, 64),
     activation: str = "tanh",
@@ -131,10 +162,11 @@ class MeanPolicy(nn.Module):
         return (self.shape_factor_max * torch.tanh(mu)).to(observation.dtype)
 
 
-def deterministic_actor(actor: ProbabilisticActor, shape_factor_max: float) -> TensorDictModule:
-    """TensorDict actor ``observation -> action`` sharing the mean network of ``actor``."""
+def deterministic_actor(actor: ProbabilisticActor) -> TensorDictModule:
+    """TensorDict actor ``observation -> action`` sharing the mean network of ``actor``; its
+    bound ``Lambda_max`` is the upper bound of the actor's action spec."""
     return TensorDictModule(
-        MeanPolicy(mean_network(actor), shape_factor_max),
+        MeanPolicy(mean_network(actor), action_bounds(actor.spec)[1]),
         in_keys=["observation"],
         out_keys=["action"],
     )

@@ -1,10 +1,15 @@
-r"""Load a trained policy for ``swimrl-eval strategy=policy policy=SPEC``.
+r"""Policy files: the format written by ``swimrl-train`` and the loader behind
+``swimrl-eval strategy=policy policy=SPEC``.
 
-``SPEC`` is one of
+A run directory holds ``policy.pt`` (the final actor + metadata) and
+``checkpoints/last.pt`` (the full training state, :mod:`swimrl.rl.checkpoint`); both are
+written atomically (``*.tmp`` then :func:`os.replace`) and hold tensors and plain containers
+only. ``SPEC`` is one of
 
 * a training run directory (its ``policy.pt``, else its ``checkpoints/last.pt``);
 * a checkpoint or policy file written by ``swimrl-train``;
-* ``pretrained/NAME``: the policy shipped in the package under ``swimrl/pretrained/NAME/``
+* ``pretrained/NAME``: the policy shipped in the package under
+  ``swimrl/policies/pretrained/NAME/``
   (short names ``ku0.1``, ``ku1``, ``ku10``, ``ku1e7``: trained at that Kubo number with all
   five signals; ``ku1e+07`` or ``ku10000000`` also find ``ku1e7``).
 
@@ -17,20 +22,94 @@ evaluation config, otherwise a :class:`~swimrl.config.ConfigError` names both se
 
 from __future__ import annotations
 
+import dataclasses
+import importlib.resources
+import os
 from pathlib import Path
 
 import torch
+import yaml
 from tensordict.nn import TensorDictModule
 
-from swimrl.config import ConfigError, EnvParams
-from swimrl.paths import CONF_DIR
-from swimrl.rl.checkpoint import CHECKPOINT_FORMAT, POLICY_FORMAT, checkpoint_path, load_file
-from swimrl.rl.models import deterministic_actor, make_actor
+from swimrl.env import EnvParams
+from swimrl.errors import ConfigError
+from swimrl.policies.networks import ModelSpec, action_spec, deterministic_actor, tanh_normal_actor
+
+CHECKPOINT_FORMAT = "swimrl-ppo-checkpoint/1"
+POLICY_FORMAT = "swimrl-ppo-policy/1"
 
 #: Where ``pretrained/NAME`` is looked up (one sub-directory per policy).
 PRETRAINED_ROOT = Path(__file__).resolve().parent / "pretrained"
 PRETRAINED_PREFIX = "pretrained/"
 SHORT_NAMES = ("ku0.1", "ku1", "ku10", "ku1e7")
+
+
+def checkpoint_path(run_dir: Path) -> Path:
+    """``<run>/checkpoints/last.pt``."""
+    return Path(run_dir) / "checkpoints" / "last.pt"
+
+
+def policy_path(run_dir: Path) -> Path:
+    """``<run>/policy.pt``."""
+    return Path(run_dir) / "policy.pt"
+
+
+def atomic_save(obj, path: Path) -> Path:
+    """``torch.save`` to ``path.tmp``, flush to disk, then ``os.replace`` onto ``path``."""
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    tmp = path.with_name(path.name + ".tmp")
+    with open(tmp, "wb") as fh:
+        torch.save(obj, fh)
+        fh.flush()
+        os.fsync(fh.fileno())
+    os.replace(tmp, path)
+    return path
+
+
+def load_file(path: Path, map_location="cpu") -> dict:
+    """Load a checkpoint or policy file (tensors and plain containers only)."""
+    return torch.load(Path(path), map_location=map_location, weights_only=True)
+
+
+def env_params_dict(params: EnvParams) -> dict:
+    """Constructor arguments of ``params`` as plain Python values."""
+    out = {}
+    for f in dataclasses.fields(params):
+        if f.init:
+            v = getattr(params, f.name)
+            out[f.name] = list(v) if isinstance(v, tuple) else v
+    return out
+
+
+def policy_meta(params: EnvParams, model: ModelSpec, dtype: str) -> dict:
+    """What is needed to rebuild the actor and check it against an evaluation config."""
+    return {
+        "signals": list(params.signals),
+        "env_params": env_params_dict(params),
+        "model": {
+            "n_obs": len(params.signals),
+            "hidden": [int(h) for h in model.hidden],
+            "activation": str(model.activation),
+            "init_std": float(model.init_std),
+            "shape_factor_max": float(params.shape_factor_max),
+            "dtype": str(dtype),
+        },
+    }
+
+
+def save_policy(path: Path, *, actor, counters: dict, config: dict, meta: dict) -> Path:
+    """Export the actor (all its parameters, incl. ``log sigma``) with its metadata."""
+    return atomic_save(
+        {
+            "format": POLICY_FORMAT,
+            "actor": actor.state_dict(),
+            "counters": dict(counters),
+            "config": config,
+            **meta,
+        },
+        path,
+    )
 
 
 def available_pretrained(root: Path | None = None) -> list[str]:
@@ -91,35 +170,36 @@ def resolve_policy_file(spec: str) -> Path:
 def signals_choice(names) -> str:
     """``signals=<group>`` whose ``conf/signals/<group>.yaml`` lists ``names``, else
     ``signals.names=[...]``."""
-    from omegaconf import OmegaConf
-
-    for f in sorted((CONF_DIR / "signals").glob("*.yaml")):
-        if list(OmegaConf.load(f).get("names", [])) == list(names):
-            return f"signals={f.stem}"
+    groups = importlib.resources.files("swimrl.conf") / "signals"
+    for f in sorted(groups.iterdir(), key=lambda f: f.name):
+        if f.name.endswith(".yaml") and yaml.safe_load(f.read_text()).get("names") == list(names):
+            return f"signals={f.name[: -len('.yaml')]}"
     return "signals.names=[" + ",".join(names) + "]"
 
 
-def check_signals(spec: str, trained: list[str], params: EnvParams) -> None:
-    """Raise a one-line ConfigError if the policy's signals differ from ``params.signals``."""
-    if tuple(trained) != tuple(params.signals):
+def check_signals(spec: str, trained: list[str], signals: tuple[str, ...]) -> None:
+    """Raise a one-line ConfigError if the policy's signals differ from ``signals``."""
+    if tuple(trained) != tuple(signals):
         raise ConfigError(
-            f"signals.names={list(params.signals)} does not match policy={spec!r}, which was "
+            f"signals.names={list(signals)} does not match policy={spec!r}, which was "
             f"trained on {list(trained)}: evaluate it with {signals_choice(trained)}"
         )
 
 
 def load_policy(spec: str, params: EnvParams) -> TensorDictModule:
-    """Deterministic actor ``observation -> action`` of the policy named by ``spec``."""
+    """Deterministic actor ``observation -> action`` of the policy named by ``spec``, checked
+    against the evaluation's signals ``params.signals``. The actor keeps the bound
+    ``Lambda_max`` it was trained with (the environment clamps to its own)."""
     path = resolve_policy_file(spec)
     data = load_file(path, map_location="cpu")
     if not isinstance(data, dict) or data.get("format") not in (CHECKPOINT_FORMAT, POLICY_FORMAT):
         raise ValueError(f"policy={spec!r}: {path} is not a swimrl-train policy or checkpoint")
-    check_signals(spec, data["signals"], params)
+    check_signals(spec, data["signals"], params.signals)
     model = data["model"]
     dtype = getattr(torch, str(model.get("dtype", "float32")))
-    actor = make_actor(
+    actor = tanh_normal_actor(
         int(model["n_obs"]),
-        float(model["shape_factor_max"]),
+        action_spec(float(model["shape_factor_max"]), dtype=dtype),
         hidden=[int(h) for h in model["hidden"]],
         activation=str(model["activation"]),
         init_std=float(model.get("init_std", 1.0)),
@@ -127,5 +207,5 @@ def load_policy(spec: str, params: EnvParams) -> TensorDictModule:
     )
     actor.load_state_dict(data["actor"])
     actor.requires_grad_(False)
-    policy = deterministic_actor(actor, float(model["shape_factor_max"]))
+    policy = deterministic_actor(actor)
     return policy.eval()

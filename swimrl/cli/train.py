@@ -12,17 +12,16 @@ See ``docs/training.md``.
 
 from __future__ import annotations
 
-import hydra
 from omegaconf import DictConfig
 
-from swimrl.paths import CONF_DIR, run_dir
+from swimrl.cli import command, run_dir
+from swimrl.config import train_config
+from swimrl.rl.run import train
 
 
-@hydra.main(config_path=str(CONF_DIR), config_name="train", version_base="1.3")
+@command("train")
 def main(cfg: DictConfig) -> dict | None:
-    from swimrl.rl.run import train  # the training stack is imported only when needed
-
-    return train(cfg, run_dir())
+    return train(train_config(cfg), run_dir())
 
 
 if __name__ == "__main__":

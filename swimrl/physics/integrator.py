@@ -8,17 +8,18 @@ Two implementations with the same arithmetic:
 
 * ``eager`` – :func:`integrate_interval`, plain torch ops on all swimmers at once (any device;
   the reference);
-* ``fused`` – ``swimrl/kernels/heun_cpu.cpp``, one pass per swimmer over the ``K`` steps with
-  everything in registers (CPU; built on first use). Tested against the reference.
+* ``fused`` – ``swimrl/physics/kernels/heun_cpu.cpp``, one pass per swimmer over the ``K``
+  steps with everything in registers (CPU; built on first use). Tested against the reference.
 """
 
 from __future__ import annotations
 
 import torch
 
-from swimrl.flows.fields import sample_basis
-from swimrl.kernels import load_cpu_kernel
-from swimrl.swimmer import heun_step
+from swimrl.errors import one_of, require
+from swimrl.flows.base import sample_basis
+from swimrl.physics.kernels import load_cpu_kernel
+from swimrl.physics.swimmer import heun_step
 
 
 def integrate_interval(
@@ -84,11 +85,9 @@ KERNELS = ("auto", "eager", "fused")
 
 def select_kernel(name: str, device: torch.device):
     """The integration function for ``kernel=name`` (``auto``: fused on CPU when it builds)."""
-    if name not in KERNELS:
-        raise ValueError(f"kernel={name!r} is invalid: allowed {list(KERNELS)}")
+    one_of("kernel", name, KERNELS)
     if name == "eager" or device.type != "cpu":
-        if name == "fused":
-            raise ValueError(f"kernel='fused' is CPU-only; device={device} needs kernel=eager")
+        require(name != "fused", "kernel", name, f"'auto' or 'eager' on device={device}")
         return integrate_interval
     if name == "auto" and load_cpu_kernel() is None:
         return integrate_interval

@@ -15,7 +15,8 @@ from __future__ import annotations
 
 import torch
 
-from swimrl.swimmer import strain_nn, strain_np
+from swimrl.errors import ConfigError
+from swimrl.physics.swimmer import strain_nn, strain_np
 
 #: All signal names, in the order of the ``signals`` key of the environment.
 SIGNAL_NAMES: tuple[str, ...] = ("n_r", "n_theta", "S_nn", "S_np", "omega")
@@ -52,10 +53,10 @@ def signal_indices(names) -> list[int]:
     """Positions of ``names`` in :data:`SIGNAL_NAMES`; raises on unknown or repeated names."""
     names = list(names)
     if not names:
-        raise ValueError(f"signals.names is empty; choose a subset of {list(SIGNAL_NAMES)}")
+        raise ConfigError(f"signals.names is empty; choose a subset of {list(SIGNAL_NAMES)}")
     bad = [s for s in names if s not in SIGNAL_NAMES]
     if bad:
-        raise ValueError(f"signals.names has unknown {bad}; allowed: {list(SIGNAL_NAMES)}")
+        raise ConfigError(f"signals.names has unknown {bad}; allowed: {list(SIGNAL_NAMES)}")
     if len(set(names)) != len(names):
-        raise ValueError(f"signals.names={names} repeats a signal")
+        raise ConfigError(f"signals.names={names} repeats a signal")
     return [SIGNAL_NAMES.index(s) for s in names]

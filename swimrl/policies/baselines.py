@@ -1,9 +1,9 @@
 r"""Baseline strategies with the interface of a learned actor.
 
 Each is a :class:`tensordict.nn.TensorDictModule` reading ``signals`` (all five, in
-:data:`swimrl.signals.SIGNAL_NAMES` order, ``S`` and ``omega`` in units of ``1/tau_K``) and
+:data:`swimrl.physics.signals.SIGNAL_NAMES` order, ``S`` and ``omega`` in units of ``1/tau_K``) and
 writing ``action`` (the shape factor ``Lambda``, shape ``(..., 1)``) within
-``[-Lambda_max, Lambda_max]``:
+``[-Lambda_max, Lambda_max]`` (``Lambda_max`` from the environment's action spec):
 
 * naive: ``Lambda = const`` (paper: ``0.98``);
 * STO (``eq:sto``): ``Lambda = -Lambda_max sign(n_theta) sign(S_np)``;
@@ -15,12 +15,19 @@ writing ``action`` (the shape factor ``Lambda``, shape ``(..., 1)``) within
 from __future__ import annotations
 
 from collections.abc import Sequence
+from dataclasses import dataclass
 
 import torch
 from tensordict.nn import TensorDictModule
 from torch import nn
+from torchrl.data import Bounded
 
-N_R, N_THETA, S_NN, S_NP, OMEGA = range(5)
+from swimrl.errors import as_float, one_of, require
+from swimrl.physics.signals import SIGNAL_NAMES
+from swimrl.policies.networks import action_bounds
+
+N_R, N_THETA, S_NN, S_NP, OMEGA = range(len(SIGNAL_NAMES))  # positions in SIGNAL_NAMES
+STRATEGIES = ("naive", "sto", "minimal", "policy")
 
 
 class NaiveShape(nn.Module):
@@ -77,22 +84,42 @@ def as_actor(module: nn.Module) -> TensorDictModule:
     return TensorDictModule(module, in_keys=["signals"], out_keys=["action"])
 
 
-def build_strategy(cfg_strategy, shape_factor_max: float) -> TensorDictModule:
-    """Baseline actor from the ``strategy`` config group (``policy`` is loaded elsewhere)."""
-    name = cfg_strategy.name
-    if name == "naive":
-        lam = float(cfg_strategy.shape_factor)
-        if not abs(lam) <= shape_factor_max:
-            raise ValueError(
-                f"strategy.shape_factor={lam} is invalid: allowed [-{shape_factor_max}, "
-                f"{shape_factor_max}] (episode.shape_factor_max)"
+@dataclass(frozen=True)
+class StrategySpec:
+    """``strategy=NAME``: ``naive`` (with ``shape_factor``), ``sto``, ``minimal`` (with
+    ``coeffs`` c1..c4) or ``policy`` (a trained policy, loaded by :mod:`.files`)."""
+
+    name: str
+    shape_factor: float | None = None
+    coeffs: tuple[float, float, float, float] | None = None
+
+    def __post_init__(self) -> None:
+        one_of("strategy.name", self.name, STRATEGIES)
+        if self.name == "naive":
+            as_float("strategy.shape_factor", self.shape_factor, lambda v: abs(v) < 1, "(-1, 1)")
+        if self.name == "minimal":
+            require(self.coeffs is not None and len(self.coeffs) == 4, "strategy.c1..c4",
+                    self.coeffs, "four numbers")
+
+    def check_bound(self, shape_factor_max: float) -> None:
+        """A naive shape factor must lie within ``[-Lambda_max, Lambda_max]``."""
+        if self.name == "naive":
+            require(
+                abs(self.shape_factor) <= shape_factor_max,
+                "strategy.shape_factor",
+                self.shape_factor,
+                f"[-{shape_factor_max}, {shape_factor_max}] (swimmer.shape_factor_max)",
             )
-        return as_actor(NaiveShape(lam))
-    if name == "sto":
-        return as_actor(ShortTimeOptimal(shape_factor_max))
-    if name == "minimal":
-        coeffs = [float(cfg_strategy[k]) for k in ("c1", "c2", "c3", "c4")]
-        return as_actor(MinimalModel(coeffs, shape_factor_max))
-    raise ValueError(
-        f"strategy.name={name!r} is invalid: allowed 'naive', 'sto', 'minimal', 'policy'"
-    )
+
+
+def build_strategy(spec: StrategySpec, action_spec: Bounded) -> TensorDictModule:
+    """Baseline actor for ``spec``; ``Lambda_max`` is the upper bound of the environment's
+    (unbatched) action spec."""
+    lam_max = action_bounds(action_spec)[1]
+    if spec.name == "naive":
+        return as_actor(NaiveShape(spec.shape_factor))
+    if spec.name == "sto":
+        return as_actor(ShortTimeOptimal(lam_max))
+    if spec.name == "minimal":
+        return as_actor(MinimalModel(spec.coeffs, lam_max))
+    raise ValueError(f"strategy {spec.name!r} is not a baseline (load a policy file instead)")

@@ -1,4 +1,4 @@
-r"""``swimrl-table``: one table of all results under a sweep directory.
+r"""One table of all results under a sweep directory (``swimrl-table``).
 
 Collects every ``metrics.json`` (``swimrl-eval``, ``swimrl-train``) and ``comparison.json``
 (``swimrl-compare``, one row per strategy) below ``DIR``. The columns are the config keys
@@ -10,20 +10,16 @@ size, and for comparisons the paired ratio to the first strategy.
 ``KEY`` and reports the mean of ``R_hat`` over the group, its standard deviation over the
 group (run-to-run spread) and ``n``.
 
-    swimrl-table multirun/train/2026-01-01_12-00-00 --md table.md --csv table.csv
-    swimrl-table multirun/train/2026-01-01_12-00-00 --average seed
 """
 
 from __future__ import annotations
 
-import argparse
-import csv
-import io
 import json
-import math
-import sys
 from collections.abc import Iterable
 from pathlib import Path
+
+from swimrl.evaluation.records import csv_table, flatten, markdown_table
+from swimrl.evaluation.statistics import mean_std_sem
 
 #: Keys never shown as swept: runtime settings, progress flags, bookkeeping.
 IGNORED_KEYS = {
@@ -51,20 +47,6 @@ RESULT_COLUMNS = (
     "ratio_sem",
     "episodes",
 )
-
-
-def flatten(d: dict, prefix: str = "") -> dict:
-    """``{"a": {"b": 1}} -> {"a.b": 1}``; lists become strings like ``[n_r, n_theta]``."""
-    out = {}
-    for k, v in d.items():
-        key = f"{prefix}{k}"
-        if isinstance(v, dict):
-            out.update(flatten(v, key + "."))
-        elif isinstance(v, list):
-            out[key] = "[" + ", ".join(str(x) for x in v) + "]"
-        else:
-            out[key] = v
-    return out
 
 
 def _records_from(path: Path, root: Path) -> list[dict]:
@@ -158,19 +140,16 @@ def build_rows(records: list[dict], average: Iterable[str] = ()) -> tuple[list[s
             groups.setdefault(gk, []).append(row)
         rows = []
         for members in groups.values():
-            vals = [m["R_hat_mean"] for m in members]
-            n = len(vals)
-            mean = sum(vals) / n
-            std = math.sqrt(sum((v - mean) ** 2 for v in vals) / (n - 1)) if n > 1 else 0.0
+            mean, std, sem = mean_std_sem([m["R_hat_mean"] for m in members])
             first = members[0]
             rows.append(
                 {
                     **{k: first[k] for k in keys},
                     "strategy": first["strategy"],
-                    "n_runs": n,
+                    "n_runs": len(members),
                     "R_hat_mean": mean,
                     "R_hat_std_runs": std,
-                    "R_hat_sem_runs": std / math.sqrt(n),
+                    "R_hat_sem_runs": sem,
                     "n_flows": first["n_flows"],
                     "n_swimmers": first["n_swimmers"],
                 }
@@ -196,64 +175,23 @@ def markdown(keys: list[str], rows: list[dict]) -> str:
     else:
         head += ["R_hat (mean +- SEM)", "std over flows", "flows x swimmers", "ratio to first"]
         head.insert(0, "run")
-    lines = ["| " + " | ".join(head) + " |", "|" + "---|" * len(head)]
+    cells = []
     for r in rows:
-        cells = [_fmt(r[k]) for k in keys] + [str(r["strategy"])]
+        row = [_fmt(r[k]) for k in keys] + [str(r["strategy"])]
         size = f"{_fmt(r['n_flows'])} x {_fmt(r['n_swimmers'])}"
         if averaged:
-            cells += [
-                str(r["n_runs"]),
-                f"{r['R_hat_mean']:.4f} +- {r['R_hat_std_runs']:.4f}",
-                size,
-            ]
+            row += [str(r["n_runs"]), f"{r['R_hat_mean']:.4f} +- {r['R_hat_std_runs']:.4f}", size]
         else:
             ratio = ""
             if r.get("ratio_to_first") is not None:
                 ratio = f"{r['ratio_to_first']:.3f} +- {r['ratio_sem']:.3f}"
             sem = "" if r["R_hat_sem"] is None else f" +- {r['R_hat_sem']:.4f}"
-            cells = [r["run"]] + cells
             std = "" if r["R_hat_std"] is None else f"{r['R_hat_std']:.4f}"
-            cells += [f"{r['R_hat_mean']:.4f}{sem}", std, size, ratio]
-        lines.append("| " + " | ".join(cells) + " |")
-    return "\n".join(lines) + "\n"
+            row = [r["run"], *row, f"{r['R_hat_mean']:.4f}{sem}", std, size, ratio]
+        cells.append(row)
+    return markdown_table(head, cells)
 
 
 def to_csv(keys: list[str], rows: list[dict]) -> str:
     """The rows as CSV (full precision)."""
-    cols = []
-    for r in rows:
-        cols.extend(c for c in r if c not in cols)
-    buf = io.StringIO()
-    w = csv.DictWriter(buf, fieldnames=cols, lineterminator="\n")
-    w.writeheader()
-    for r in rows:
-        w.writerow({c: "" if r.get(c) is None else r.get(c) for c in cols})
-    return buf.getvalue()
-
-
-def main(argv: list[str] | None = None) -> int:
-    p = argparse.ArgumentParser(prog="swimrl-table", description=__doc__.splitlines()[0])
-    p.add_argument("dir", type=Path, help="sweep (or any) directory to search for results")
-    p.add_argument("--csv", type=Path, help="write the table as CSV here")
-    p.add_argument("--md", type=Path, help="write the table as Markdown here")
-    p.add_argument(
-        "--average", action="append", default=[], metavar="KEY", help="pool runs over KEY"
-    )
-    args = p.parse_args(argv)
-    if not args.dir.is_dir():
-        p.error(f"{args.dir} is not a directory")
-    records = collect(args.dir)
-    if not records:
-        p.error(f"no metrics.json or comparison.json below {args.dir}")
-    keys, rows = build_rows(records, args.average)
-    md = markdown(keys, rows)
-    if args.md:
-        args.md.write_text(md)
-    if args.csv:
-        args.csv.write_text(to_csv(keys, rows))
-    sys.stdout.write(md)
-    return 0
-
-
-if __name__ == "__main__":
-    raise SystemExit(main())
+    return csv_table(rows)

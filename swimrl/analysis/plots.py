@@ -1,0 +1,70 @@
+"""Figures of result records: ``R_hat`` against a constant shape factor and against Ku."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+
+
+def plot_naive_scan(record: dict, path) -> None:
+    """``R_hat`` (mean +- SEM) against the constant shape factor of naive strategies."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    rows = [r for r in record["rows"] if r["label"].startswith("naive(")]
+    if len(rows) < 2:
+        return
+    lam = [float(r["label"][6:-1]) for r in rows]
+    fig, ax = plt.subplots(figsize=(5, 3.5))
+    ax.errorbar(
+        lam,
+        [r["R_hat_mean"] for r in rows],
+        yerr=[r["R_hat_sem"] for r in rows],
+        marker="o",
+        capsize=3,
+        color="k",
+    )
+    flow = record["config"]["flow"]
+    ax.set_xlabel(r"constant shape factor $\Lambda$")
+    ax.set_ylabel(r"$\hat R$")
+    ax.set_title(
+        f"naive strategies, Ku = {flow.get('kubo', float('nan')):g} "
+        f"({record['n_flows']} flows x {record['n_swimmers']})"
+    )
+    fig.tight_layout()
+    fig.savefig(path, dpi=120)
+    plt.close(fig)
+
+
+def plot_performance(summaries: list[dict], path: Path) -> None:
+    """``R_hat`` against Ku (log axis): naive, STO, smart (mean over seeds and each seed)."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    ku = np.asarray([s["kubo"] for s in summaries])
+    fig, ax = plt.subplots(figsize=(5.5, 3.8))
+    baselines = (("naive", "k", r"naive ($\Lambda=0.98$)"), ("sto", "tab:green", "STO"))
+    for key, color, label in baselines:
+        ax.errorbar(ku, [s[key]["R_hat_mean"] for s in summaries],
+                    yerr=[s[key]["R_hat_std"] for s in summaries], color=color, marker="o",
+                    capsize=3, label=label)
+    ax.errorbar(ku, [s["smart_mean"] for s in summaries],
+                yerr=[np.mean([x["R_hat_std"] for x in s["seeds"]]) for s in summaries],
+                color="tab:orange", marker="o", capsize=3, label="smart (mean over seeds)")
+    for s in summaries:
+        ax.plot([s["kubo"]] * len(s["seeds"]), [x["R_hat_mean"] for x in s["seeds"]], "_",
+                color="tab:orange", markersize=10)
+    ax.set_xscale("log")
+    ax.set_xlabel("Ku")
+    ax.set_ylabel(r"$\hat R$")
+    ax.set_title("error bars: std over flows; dashes: seeds", fontsize=9)
+    ax.legend(fontsize=8)
+    fig.tight_layout()
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fig.savefig(path, dpi=130)
+    plt.close(fig)

@@ -1,0 +1,49 @@
+r"""``swimrl-compare`` and ``swimrl-naive-scan``: several strategies on identical flows.
+
+Outputs in the run directory: ``comparison.json``, ``comparison.md`` and, for a scan of
+constant shape factors, ``naive_scan.png`` (``R_hat`` against ``Lambda``).
+
+    swimrl-compare flow.kubo=10                      # naive vs STO
+    swimrl-compare flow.kubo=10 'compare.strategies=[naive,sto,policy]' \
+        'compare.policies=[pretrained/ku10,outputs/train/my_run]'   # + trained policies
+    swimrl-naive-scan flow.kubo=10                   # constant Lambda over [-0.98, 0.98]
+"""
+
+from __future__ import annotations
+
+import logging
+
+from omegaconf import DictConfig
+
+from swimrl.analysis.plots import plot_naive_scan
+from swimrl.cli import command, run_dir
+from swimrl.config import compare_config
+from swimrl.evaluation.compare import compare
+from swimrl.evaluation.records import refuse_overwrite, write_comparison
+
+log = logging.getLogger(__name__)
+
+
+def _main(cfg: DictConfig) -> dict:
+    c = compare_config(cfg)
+    out = run_dir()
+    refuse_overwrite(out / "comparison.json", c.overwrite)
+    record = compare(c)
+    print(write_comparison(record, out), flush=True)
+    plot_naive_scan(record, out / "naive_scan.png")
+    log.info("wrote %s", out / "comparison.json")
+    return record
+
+
+@command("compare")
+def main(cfg: DictConfig) -> dict:
+    return _main(cfg)
+
+
+@command("naive_scan")
+def main_naive_scan(cfg: DictConfig) -> dict:
+    return _main(cfg)
+
+
+if __name__ == "__main__":
+    main()

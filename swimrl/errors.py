@@ -1,0 +1,65 @@
+"""One error type for bad input, and the checks that raise it.
+
+Every check produces one line ``KEY=VALUE is invalid: allowed RANGE`` that names the config
+key as the user writes it (``swimmer.shape_factor_max``, ``flow.dns.nu``, ...). The typed
+configs (:mod:`swimrl.config` builds them) call these checks in their ``__post_init__``, so a
+bad value stops the command before any compute.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable, Iterable, Iterator
+from contextlib import contextmanager
+
+
+class ConfigError(ValueError):
+    """A config value outside its allowed range (one line naming key, value and range)."""
+
+
+def fail(key: str, value, allowed: str) -> None:
+    """Raise ``ConfigError("KEY=VALUE is invalid: allowed RANGE")``."""
+    raise ConfigError(f"{key}={value!r} is invalid: allowed {allowed}")
+
+
+def require(ok: bool, key: str, value, allowed: str) -> None:
+    """:func:`fail` unless ``ok``."""
+    if not ok:
+        fail(key, value, allowed)
+
+
+def as_float(key: str, value, ok: Callable[[float], bool], allowed: str) -> float:
+    """``value`` as a finite float (not a bool) with ``ok(value)``."""
+    try:
+        f = math.nan if isinstance(value, bool) else float(value)
+    except (TypeError, ValueError):
+        f = math.nan
+    require(math.isfinite(f) and ok(f), key, value, allowed)
+    return f
+
+
+def as_int(key: str, value, low: int = 1) -> int:
+    """``value`` as an integer ``>= low`` (whole floats such as ``1e6`` are accepted)."""
+    return int(as_float(key, value, lambda f: f == int(f) and f >= low, f"an integer >= {low}"))
+
+
+def one_of(key: str, value, choices: Iterable[str]) -> str:
+    """``value`` if it is one of ``choices``."""
+    choices = tuple(choices)
+    require(value in choices, key, value, f"one of {list(choices)}")
+    return str(value)
+
+
+def as_bool(key: str, value) -> bool:
+    """``value`` if it is ``true`` or ``false``."""
+    require(isinstance(value, bool), key, value, "true or false")
+    return bool(value)
+
+
+@contextmanager
+def key_prefix(prefix: str) -> Iterator[None]:
+    """Prefix the key of a :class:`ConfigError` raised inside (``dns.nu`` -> ``flow.dns.nu``)."""
+    try:
+        yield
+    except ConfigError as err:
+        raise ConfigError(f"{prefix}{err}") from err

@@ -1,0 +1,3 @@
+"""Evaluation: the rollout loop (:mod:`.rollout`, single and shared flows), statistics over
+flows (:mod:`.statistics`), comparisons (:mod:`.compare`) and result records and tables
+(:mod:`.records`)."""

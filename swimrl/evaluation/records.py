@@ -1,0 +1,100 @@
+"""Result records on disk: atomic JSON files, and the one Markdown / CSV table writer.
+
+``metrics.json`` (``swimrl-eval``, ``swimrl-train``), ``comparison.json`` (``swimrl-compare``)
+and the other records are written with :func:`write_json` (``*.tmp`` then
+:func:`os.replace`; an existing record is never replaced unless asked). Every table the
+commands print or write goes through :func:`markdown_table` / :func:`csv_table`.
+"""
+
+from __future__ import annotations
+
+import csv
+import io
+import json
+from collections.abc import Sequence
+from pathlib import Path
+
+
+def refuse_overwrite(path: Path, overwrite: bool) -> None:
+    """``FileExistsError`` if ``path`` exists and ``overwrite`` is false."""
+    if Path(path).exists() and not overwrite:
+        raise FileExistsError(f"{path} exists; pass overwrite=true to replace it")
+
+
+def write_json(record: dict, path: Path, overwrite: bool = True) -> Path:
+    """Write ``record`` as JSON atomically (refusing to replace ``path`` unless ``overwrite``)."""
+    path = Path(path)
+    refuse_overwrite(path, overwrite)
+    tmp = path.with_suffix(path.suffix + ".tmp")
+    tmp.write_text(json.dumps(record, indent=2))
+    tmp.replace(path)
+    return path
+
+
+def markdown_table(head: Sequence[str], rows: Sequence[Sequence[str]]) -> str:
+    """``| a | b |`` lines: a header, its ``|---|`` rule and one line per row."""
+    lines = ["| " + " | ".join(head) + " |", "|" + "---|" * len(head)]
+    lines += ["| " + " | ".join(str(c) for c in row) + " |" for row in rows]
+    return "\n".join(lines) + "\n"
+
+
+def csv_table(rows: Sequence[dict]) -> str:
+    """Rows (dicts) as CSV with the union of their keys as columns; None as empty."""
+    cols: list[str] = []
+    for r in rows:
+        cols.extend(c for c in r if c not in cols)
+    buf = io.StringIO()
+    w = csv.DictWriter(buf, fieldnames=cols, lineterminator="\n")
+    w.writeheader()
+    for r in rows:
+        w.writerow({c: "" if r.get(c) is None else r.get(c) for c in cols})
+    return buf.getvalue()
+
+
+def flatten(d: dict, prefix: str = "") -> dict:
+    """``{"a": {"b": 1}} -> {"a.b": 1}``; lists become strings like ``[n_r, n_theta]``."""
+    out = {}
+    for k, v in d.items():
+        key = f"{prefix}{k}"
+        if isinstance(v, dict):
+            out.update(flatten(v, key + "."))
+        elif isinstance(v, list):
+            out[key] = "[" + ", ".join(str(x) for x in v) + "]"
+        else:
+            out[key] = v
+    return out
+
+
+def flow_label(flow: dict, sep: str = "=") -> str:
+    """``Ku=10`` for the stochastic flow, else the flow's name (from a record's config)."""
+    return f"Ku{sep}{flow['kubo']:g}" if flow["name"] == "stochastic" else flow["name"]
+
+
+def summary_line(m: dict) -> str:
+    """One line: strategy, flow, R_hat +- SEM, size, time and speed."""
+    return (
+        f"{m['strategy']} {flow_label(m['config']['flow'])}: R_hat = {m['R_hat_mean']:.4f} +- "
+        f"{m['R_hat_sem']:.4f} (SEM; std over flows {m['R_hat_std']:.4f}) over {m['n_flows']} "
+        f"flows x {m['n_swimmers']} swimmers; {m['wall_s']:.1f} s, "
+        f"{m['swimmer_substeps_per_s']:.3g} swimmer-substeps/s"
+    )
+
+
+def comparison_markdown(record: dict) -> str:
+    """A ``comparison.json`` record as a Markdown table (paired ratios to the first row)."""
+    first = record["rows"][0]["label"]
+    title = (f"{flow_label(record['config']['flow'], ' = ')}, {record['n_flows']} flows x "
+             f"{record['n_swimmers']} swimmers, seed {record['seed']}\n\n")
+    head = ["strategy", "R_hat (mean +- SEM)", "std over flows", f"ratio to {first} (paired)"]
+    rows = [[r["label"], f"{r['R_hat_mean']:.4f} +- {r['R_hat_sem']:.4f}",
+             f"{r['R_hat_std']:.4f}", f"{r['ratio_to_first']:.3f} +- {r['ratio_sem']:.3f}"]
+            for r in record["rows"]]
+    return title + markdown_table(head, rows)
+
+
+def write_comparison(record: dict, out: Path) -> str:
+    """``comparison.json`` (atomic) and ``comparison.md`` in ``out``; returns the table."""
+    write_json(record, Path(out) / "comparison.json")
+    table = comparison_markdown(record)
+    (Path(out) / "comparison.md").write_text(table)
+    return table

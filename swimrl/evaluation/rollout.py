@@ -1,0 +1,185 @@
+r"""The evaluation loop: full episodes of every swimmer, on fresh flow realisations.
+
+For each of ``n_flows`` realisations, ``n_swimmers`` swimmers start at uniformly random
+positions and orientations and follow a strategy for ``T``; the performance index (paper
+``eq:reward2``) of a swimmer is ``R_hat = |x(T) - x_0| / (v_s T)``; the statistics over
+flows are those of :mod:`swimrl.evaluation.statistics`. Flows are simulated in chunks of
+``flows_per_batch``; chunk ``c`` is seeded with ``SeedSequence([seed, c])``, so strategies
+that use no randomness see identical flows and initial conditions for the same ``seed``
+(common random numbers) and their differences are paired.
+
+Several strategies can share the flows: swimmers do not act on the flow, so ``K`` strategies
+with ``S`` swimmers each run in one environment of ``F`` flows x ``K S`` swimmers, block
+``k`` (swimmers ``k S .. (k+1) S - 1`` of every flow) following strategy ``k``
+(:class:`SplitActor`). The flow is then computed (or a stored run decoded) once for all.
+"""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass, replace
+
+import numpy as np
+import torch
+from tensordict import TensorDictBase
+from tensordict.nn import TensorDictModule
+from torch import nn
+from tqdm.auto import tqdm
+
+from swimrl.env import EnvParams, SwimmerEnv
+from swimrl.errors import ConfigError, as_int
+from swimrl.flows.build import FlowSpec
+from swimrl.policies.baselines import StrategySpec, build_strategy
+from swimrl.policies.files import load_policy
+from swimrl.runtime import Runtime
+
+from .statistics import flow_statistics, mean_flow_stats
+
+#: A strategy to evaluate: a baseline (built against the environment's action spec) or an
+#: actor module (e.g. a loaded or a training policy).
+Actor = StrategySpec | TensorDictModule
+
+
+@dataclass(frozen=True)
+class EvalSizes:
+    """``eval.*``: flows, swimmers per flow, flows simulated at once, progress bar."""
+
+    n_flows: int = 10
+    n_swimmers: int = 200
+    flows_per_batch: int = 10
+    progress: bool = True
+
+    def __post_init__(self) -> None:
+        for key in ("n_flows", "n_swimmers", "flows_per_batch"):
+            as_int(f"eval.{key}", getattr(self, key))
+
+
+@dataclass(frozen=True)
+class EvalSetup:
+    """Where and how strategies are evaluated; ``record`` (the resolved config) is written
+    into the results."""
+
+    flow: FlowSpec
+    params: EnvParams
+    runtime: Runtime
+    sizes: EvalSizes
+    seed: int
+    record: dict
+
+    def resized(self, n_flows: int, n_swimmers: int) -> EvalSetup:
+        """The same setup with ``n_flows x n_swimmers`` and no progress bar."""
+        sizes = EvalSizes(n_flows, n_swimmers, min(self.sizes.flows_per_batch, n_flows), False)
+        return replace(self, sizes=sizes)
+
+
+@dataclass(frozen=True)
+class EvalConfig:
+    """``swimrl-eval``: one strategy (a baseline, or ``policy`` with a policy spec) on ``setup``."""
+
+    setup: EvalSetup
+    strategy: StrategySpec
+    policy: str | None = None
+    overwrite: bool = False
+
+    def __post_init__(self) -> None:
+        if self.strategy.name == "policy" and self.policy is None:
+            raise ConfigError(
+                "policy=None is invalid: strategy=policy needs policy=<run dir | checkpoint | "
+                "pretrained/NAME>"
+            )
+        self.strategy.check_bound(self.setup.params.shape_factor_max)
+
+
+def chunk_seed(seed: int, chunk: int) -> int:
+    """Independent seed for flow chunk ``chunk`` of an evaluation seeded with ``seed``."""
+    return int(np.random.SeedSequence([int(seed), int(chunk)]).generate_state(1)[0])
+
+
+def actor_for(strategy: StrategySpec, policy: str | None, params: EnvParams) -> Actor:
+    """The baseline ``strategy``, or for ``strategy=policy`` the policy file ``policy``."""
+    if strategy.name != "policy":
+        return strategy
+    return load_policy(str(policy), params)
+
+
+@torch.no_grad()
+def run_episodes(
+    env: SwimmerEnv,
+    actor,
+    progress: tqdm | None = None,
+    on_decision: Callable[[int, TensorDictBase], None] | None = None,
+) -> torch.Tensor:
+    """One full episode of every swimmer of ``env``; returns ``R_hat`` ``(F, S)``.
+
+    ``on_decision(i, td)`` sees decision ``i`` (signals and action) before the step.
+    """
+    td = env.reset()
+    for i in range(env.params.n_decisions):
+        td = actor(td)
+        if on_decision is not None:
+            on_decision(i, td)
+        td = env.step(td).get("next")
+        if progress is not None:
+            progress.update(1)
+    return td.get("distance").squeeze(-1) / env.reference_distance
+
+
+class SplitActor(nn.Module):
+    """Route swimmer block ``k`` (``td[:, k S:(k+1) S]``) to ``actors[k]``; writes ``action``."""
+
+    def __init__(self, actors: list, block: int):
+        super().__init__()
+        self.actors = nn.ModuleList(actors)
+        self.block = int(block)
+
+    def forward(self, td: TensorDictBase) -> TensorDictBase:
+        s = self.block
+        actions = [a(td[:, k * s:(k + 1) * s].clone(False)).get("action")
+                   for k, a in enumerate(self.actors)]
+        td.set("action", torch.cat(actions, dim=1))
+        return td
+
+
+def evaluate_shared(setup: EvalSetup, actors: Sequence[Actor], desc: str = "eval") -> list[dict]:
+    """Per-strategy metrics (``R_hat_mean/std/sem``, ``per_flow``, ...) of ``actors`` on the
+    same flows, ``n_swimmers`` swimmers each (one actor: the plain evaluation)."""
+    sizes, params = setup.sizes, setup.params
+    setup.runtime.apply()
+    n_flows, per_batch, s, k = sizes.n_flows, sizes.flows_per_batch, sizes.n_swimmers, len(actors)
+    chunks = [min(per_batch, n_flows - i) for i in range(0, n_flows, per_batch)]
+    bar = tqdm(total=len(chunks) * params.n_decisions, desc=desc, unit="step",
+               disable=not sizes.progress, mininterval=2.0)
+    per_flow: list[list[float]] = [[] for _ in range(k)]
+    stats, sim_s, router = [], 0.0, None
+    t_start = time.perf_counter()
+    for c, n_c in enumerate(chunks):
+        env = SwimmerEnv.build(setup.flow, params, setup.runtime, n_c, k * s,
+                               chunk_seed(setup.seed, c))
+        if router is None:
+            spec = env.action_spec_unbatched
+            modules = [build_strategy(a, spec) if isinstance(a, StrategySpec) else a
+                       for a in actors]
+            modules = [m.to(setup.runtime.device) for m in modules]
+            router = modules[0] if k == 1 else SplitActor(modules, s)
+        t0 = time.perf_counter()
+        r_hat = run_episodes(env, router, bar).double()
+        sim_s += time.perf_counter() - t0
+        stats.append(env.flow.measured_stats())
+        for j in range(k):
+            per_flow[j].extend(r_hat[:, j * s:(j + 1) * s].mean(dim=1).cpu().tolist())
+    bar.close()
+    wall = time.perf_counter() - t_start
+    substeps = n_flows * k * s * params.n_decisions * params.n_substeps
+    how = "averaged over flow chunks" + (f", shared by {k} strategies" if k > 1 else "")
+    flow_stats = mean_flow_stats(stats, how)
+    return [{**flow_statistics(per_flow[j]), "n_flows": n_flows, "n_swimmers": s,
+             "seed": setup.seed, "flow_stats": flow_stats, "wall_s": wall,
+             "swimmer_substeps_per_s": substeps / sim_s, "config": setup.record}
+            for j in range(k)]
+
+
+def evaluate(setup: EvalSetup, actor: Actor, strategy: str) -> dict:
+    """Metrics of one strategy (named ``strategy`` in the record) on ``setup``."""
+    (m,) = evaluate_shared(setup, [actor], desc=f"eval {strategy}")
+    return {"strategy": strategy, **m}

@@ -1,0 +1,129 @@
+r"""Typed descriptions of the three flows (``flow=stochastic | dns_replay | dns``) and the
+factory that builds ``n_flows`` realisations of one.
+
+Each spec checks its values on construction (one :class:`~swimrl.errors.ConfigError` naming
+the ``flow.*`` key). Replayed flows (a stored run, or a DNS stepped alongside) are
+interpolated in time over decision intervals ``T_u`` and episodes ``T`` given in units of
+the run's own ``tau_K``; the stochastic flow has ``tau_K = 0.5`` in units ``ell_f = u_rms = 1``.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from pathlib import Path
+
+import torch
+
+from swimrl.errors import key_prefix, require
+from swimrl.flows.base import GriddedFlow
+from swimrl.flows.dns.params import DNSParams
+from swimrl.flows.dns.spinup import SpinupSchedule
+from swimrl.flows.replay import ReplayFlow
+from swimrl.flows.sources import DNSStore, LiveDNS
+from swimrl.flows.stochastic import StochasticFlow
+
+FLOWS = ("stochastic", "dns_replay", "dns")
+
+
+@dataclass(frozen=True)
+class StochasticSpec:
+    """``flow=stochastic``: the paper's flow at Kubo number ``kubo`` (Sec. II B)."""
+
+    kubo: float
+    n_modes: int = 5
+    n_grid: int = 400
+    spacing: float = 0.025
+    name: str = "stochastic"
+
+    def __post_init__(self) -> None:
+        require(self.kubo > 0, "flow.kubo", self.kubo, "> 0 (e.g. 0.1, 1, 10, 1e7)")
+        require(self.n_modes >= 1, "flow.n_modes", self.n_modes, "integer >= 1")
+        n = self.n_grid
+        require(n >= 4 and n % 2 == 0, "flow.n_grid", n, "even integer >= 4")
+        require(self.spacing > 0, "flow.spacing", self.spacing, "> 0 (units ell_f)")
+
+
+@dataclass(frozen=True)
+class StoredRunSpec:
+    """``flow=dns_replay``: a run stored by ``swimrl-dns`` at ``path``."""
+
+    path: Path
+    name: str = "dns_replay"
+
+    def __post_init__(self) -> None:
+        p = Path(self.path)
+        require(
+            (p / "zarr.json").exists() or (p / ".zgroup").exists(),
+            "flow.path",
+            str(self.path),
+            "a DNS store made by swimrl-dns (see docs/dns.md)",
+        )
+
+
+@dataclass(frozen=True)
+class LiveDNSSpec:
+    """``flow=dns``: one DNS realisation per flow, spun up, then stepped with the swimmers."""
+
+    dns: DNSParams
+    spinup_time: float
+    measure_time: float
+    interval_tau_k: float
+    name: str = "dns"
+
+    def __post_init__(self) -> None:
+        for key in ("spinup_time", "measure_time", "interval_tau_k"):
+            require(getattr(self, key) > 0, f"flow.{key_name(key)}", getattr(self, key), "> 0")
+        require(
+            self.measure_time <= self.spinup_time,
+            "flow.spinup.measure_time",
+            self.measure_time,
+            f"<= flow.spinup.time={self.spinup_time}",
+        )
+
+    @property
+    def spinup(self) -> SpinupSchedule:
+        """Step counts of the spin-up."""
+        return SpinupSchedule.from_times(self.spinup_time, self.measure_time, self.dns.dt)
+
+
+def key_name(field: str) -> str:
+    """Config key of a :class:`LiveDNSSpec` field."""
+    return {"spinup_time": "spinup.time", "measure_time": "spinup.measure_time"}.get(field, field)
+
+
+FlowSpec = StochasticSpec | StoredRunSpec | LiveDNSSpec
+
+
+def live_dns_params(solver: dict, device: torch.device, dtype: torch.dtype) -> DNSParams:
+    """Solver parameters of ``flow.dns`` on the run's ``device`` and ``dtype``."""
+    with key_prefix("flow."):
+        return DNSParams.from_mapping(
+            {**solver, "device": str(device), "dtype": str(dtype).replace("torch.", "")}
+        )
+
+
+def build_flow(
+    spec: FlowSpec,
+    n_flows: int,
+    device: torch.device,
+    dtype: torch.dtype,
+    generator: torch.Generator,
+    interval: float,
+    duration: float,
+) -> GriddedFlow:
+    """``n_flows`` realisations of ``spec``; ``interval`` ``T_u`` and ``duration`` ``T`` in
+    units of ``tau_K`` (used by the replayed flows)."""
+    common = {"device": device, "dtype": dtype, "generator": generator}
+    if isinstance(spec, StochasticSpec):
+        return StochasticFlow(
+            n_flows, spec.kubo, spec.n_modes, spec.n_grid, spec.spacing, **common
+        )
+    if isinstance(spec, LiveDNSSpec):
+        seeds = torch.randint(0, 2**31 - 1, (n_flows,), generator=generator, device=device)
+        source = LiveDNS(
+            spec.dns, [int(x) for x in seeds.tolist()], spec.spinup, spec.interval_tau_k
+        )
+    else:
+        source = DNSStore(Path(spec.path))
+    tau_k = source.tau_k
+    return ReplayFlow(source, n_flows, interval * tau_k, duration * tau_k, **common)

@@ -1,0 +1,57 @@
+"""Where and how a run computes: torch device, dtype, CPU threads and integration kernel."""
+
+from __future__ import annotations
+
+import os
+from dataclasses import dataclass
+
+import torch
+
+from swimrl.errors import ConfigError, one_of, require
+from swimrl.physics.integrator import KERNELS
+
+DTYPES = {"float32": torch.float32, "float64": torch.float64}
+
+
+def resolve_device(device: str) -> torch.device:
+    """``cpu``, ``cuda`` or ``cuda:N``; a clear error if CUDA is asked for but absent."""
+    try:
+        dev = torch.device(device)
+    except RuntimeError:
+        dev = None
+    if dev is None or dev.type not in ("cpu", "cuda"):
+        raise ConfigError(f"device={device!r} is invalid: allowed 'cpu', 'cuda', 'cuda:N'")
+    if dev.type == "cuda" and not torch.cuda.is_available():
+        raise ConfigError(f"device={device!r} is invalid: CUDA is not available on this machine")
+    return dev
+
+
+@dataclass(frozen=True)
+class Runtime:
+    """``device``, ``dtype`` (``float32`` | ``float64``), ``threads`` (None: all cores) and
+    ``kernel`` (``auto`` | ``eager`` | ``fused``), checked on construction."""
+
+    device: torch.device
+    dtype: torch.dtype
+    threads: int | None = None
+    kernel: str = "auto"
+
+    @classmethod
+    def from_names(
+        cls, device: str, dtype: str, threads: int | None = None, kernel: str = "auto"
+    ) -> Runtime:
+        """From the config's strings (``device=cpu dtype=float32 threads=1 kernel=auto``)."""
+        dev = resolve_device(str(device))
+        one_of("dtype", dtype, DTYPES)
+        one_of("kernel", kernel, KERNELS)
+        require(
+            threads is None or (isinstance(threads, int) and threads >= 1),
+            "threads",
+            threads,
+            "null or an integer >= 1",
+        )
+        return cls(dev, DTYPES[dtype], threads, kernel)
+
+    def apply(self) -> None:
+        """``torch.set_num_threads(threads)`` (all cores when ``threads`` is None)."""
+        torch.set_num_threads(int(self.threads) if self.threads else (os.cpu_count() or 1))
