@@ -5,8 +5,10 @@ from __future__ import annotations
 import copy
 import json
 import math
+import shutil
 import subprocess
 import sys
+from pathlib import Path
 
 import pytest
 import torch
@@ -373,3 +375,22 @@ def test_training_in_a_stored_dns_run(compose_cfg, tmp_path):
     assert math.isfinite(metrics["R_hat_mean"]) and metrics["training"]["frames"] == 320
     assert metrics["flow_stats"]["u_rms"] > 0 and s.n_times == 40
     assert metrics["config"]["flow"]["name"] == "dns_replay"
+
+
+def test_resume_a_checkpoint_written_before_the_key_renames(compose_cfg, tmp_path):
+    """``checkpoints/last.pt`` of a run stopped after update 2 by the code before the config
+    keys were renamed (``episode.shape_factor_max`` then): resuming it with the same settings
+    finishes the run with exactly the held-out R_hat that code reached."""
+    data = Path(__file__).parent / "data" / "legacy_checkpoint"
+    expected = json.loads((data / "expected.json").read_text())
+    assert load_file(data / "last.pt")["config"]["episode"]["shape_factor_max"] == 0.95
+    overrides = [o.replace("episode.shape_factor_max", "swimmer.shape_factor_max")
+                 for o in expected["overrides"]]
+    checkpoint_path(tmp_path).parent.mkdir(parents=True)
+    shutil.copy(data / "last.pt", checkpoint_path(tmp_path))
+    with pytest.raises(ConfigError, match="swimmer.shape_factor_max"):
+        train(compose_cfg([*overrides, "resume=true", "swimmer.shape_factor_max=0.9"],
+                          name="train"), tmp_path)
+    metrics = train(compose_cfg([*overrides, "resume=true"], name="train"), tmp_path)
+    assert metrics["training"]["updates"] == 4
+    assert metrics["per_flow"] == expected["per_flow"]
