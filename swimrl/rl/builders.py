@@ -118,6 +118,7 @@ def make_loss(cfg: DictConfig, actor, critic) -> tuple[ClipPPOLoss, GAE]:
         actor,
         critic,
         clip_epsilon=float(c.clip_epsilon),
+        entropy_bonus=float(c.entropy_coeff) > 0,  # no Monte-Carlo entropy sample when unused
         entropy_coeff=float(c.entropy_coeff),
         critic_coeff=float(c.critic_coeff),
         loss_critic_type=str(c.loss_critic_type),
@@ -130,8 +131,8 @@ def make_optimizers(cfg: DictConfig, actor, critic) -> tuple[torch.optim.Adam, t
     """Separate Adam optimisers (paper: ``4e-4`` actor, ``8e-5`` critic)."""
     eps = float(cfg.optim.eps)
     return (
-        torch.optim.Adam(actor.parameters(), lr=float(cfg.optim.lr_actor), eps=eps),
-        torch.optim.Adam(critic.parameters(), lr=float(cfg.optim.lr_critic), eps=eps),
+        torch.optim.Adam(actor.parameters(), lr=float(cfg.optim.lr_actor), eps=eps, foreach=True),
+        torch.optim.Adam(critic.parameters(), lr=float(cfg.optim.lr_critic), eps=eps, foreach=True),
     )
 
 
