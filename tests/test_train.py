@@ -76,10 +76,10 @@ def test_ppo_end_to_end(train_cfg, tmp_path):
     assert (tmp_path / "policy.pt").is_file() and checkpoint_path(tmp_path).is_file()
     assert list((tmp_path / "tb" / "ppo").glob("events.out.tfevents.*"))
     s = scalars(tmp_path)
+    assert "train/loss_entropy" not in s  # entropy_coeff = 0: no Monte-Carlo entropy sample
     for tag in (
         "train/loss_objective",
         "train/loss_critic",
-        "train/loss_entropy",
         "train/kl_approx",
         "train/clip_fraction",
         "train/lr_actor",
@@ -90,6 +90,13 @@ def test_ppo_end_to_end(train_cfg, tmp_path):
         assert len(s[tag]) == 4 and all(math.isfinite(v) for _, v in s[tag]), tag
     assert [step for step, _ in s["train/loss_critic"]] == [80, 160, 240, 320]
     assert [step for step, _ in s["eval/R_hat"]] == [0, 160, 320]  # initial policy first
+    # the committed-record form of the curves: one CSV row per logged step, same values
+    import csv
+
+    rows = list(csv.DictReader((tmp_path / "curves.csv").open()))
+    assert [int(r["frames"]) for r in rows] == [0, 80, 160, 240, 320]
+    evals = [(int(r["frames"]), float(r["eval/R_hat"])) for r in rows if r["eval/R_hat"]]
+    assert evals == [(st, pytest.approx(v, rel=1e-5)) for st, v in s["eval/R_hat"]]
     assert "train/R_hat" in s  # episodes of 20 decisions finish every other batch
     # train.compare_baselines: STO, naive and the policy on the final evaluation's flows
     rec = json.loads((tmp_path / "comparison.json").read_text())
@@ -394,3 +401,67 @@ def test_resume_a_checkpoint_written_before_the_key_renames(compose_cfg, tmp_pat
     metrics = train(compose_cfg([*overrides, "resume=true"], name="train"), tmp_path)
     assert metrics["training"]["updates"] == 4
     assert metrics["per_flow"] == expected["per_flow"]
+
+
+def _one_minibatch(trainer: PPOTrainer):
+    """A fixed minibatch: one collected batch of the trainer's env, with GAE."""
+    from swimrl.rl.builders import make_collector
+
+    collector = make_collector(
+        trainer.env, trainer.actor, trainer.plan, trainer.plan.frames_per_batch, "cpu"
+    )
+    data = next(iter(collector))
+    collector.shutdown()
+    with torch.no_grad():
+        data = trainer.gae(data)
+    return data.select(*trainer._loss_keys(data), strict=False).reshape(-1)[:40]
+
+
+def _loss_and_grads(trainer: PPOTrainer, fn, batch):
+    for p in [*trainer.actor.parameters(), *trainer.critic.parameters()]:
+        p.grad = None
+    out = fn(batch)
+    grads = [p.grad.clone() for p in [*trainer.actor.parameters(), *trainer.critic.parameters()]]
+    return out, grads
+
+
+@pytest.mark.parametrize("entropy_coeff", [0.0, 0.005])
+def test_compiled_update_matches_eager(train_cfg, tmp_path, entropy_coeff):
+    """``train.compile=true`` (torch.compile of loss + backward) gives the eager loss terms
+    and gradients on a fixed minibatch, to float32 round-off."""
+    c = train_config(train_cfg("train.compile=true", f"loss.entropy_coeff={entropy_coeff}"))
+    trainer = PPOTrainer(c, make_plan(c), tmp_path, torch.device("cpu"), torch.float32)
+    batch = _one_minibatch(trainer)
+    compiled = trainer._compiled_loss_backward()
+    assert compiled is not trainer._loss_backward  # the compiled path is taken
+    if entropy_coeff > 0:  # the entropy's reparameterised sample: same RNG state for both
+        torch.manual_seed(7)
+    eager_out, eager_grads = _loss_and_grads(trainer, trainer._loss_backward, batch)
+    if entropy_coeff > 0:
+        torch.manual_seed(7)
+    comp_out, comp_grads = _loss_and_grads(trainer, compiled, batch)
+    keys = ["loss_objective", "loss_critic"] + (["loss_entropy"] if entropy_coeff else [])
+    assert ("loss_entropy" in eager_out.keys(include_nested=False)) == (entropy_coeff > 0)
+    for k in keys:
+        torch.testing.assert_close(comp_out[k], eager_out[k], rtol=1e-5, atol=1e-6)
+    for g_c, g_e in zip(comp_grads, eager_grads, strict=True):
+        torch.testing.assert_close(g_c, g_e, rtol=1e-4, atol=1e-6)
+    assert any(bool(g.abs().sum() > 0) for g in eager_grads)
+
+
+def test_resumed_run_continues_compiled(train_cfg, tmp_path, monkeypatch):
+    """A run stopped and resumed with ``train.compile=true`` trains the resumed updates
+    through the compiled loss (and finishes)."""
+    opts = ("train.compile=true", "train.eval_every=0")
+    assert train(train_cfg("train.stop_after_updates=2", *opts), tmp_path) is None
+    used = []
+    original = PPOTrainer._compiled_loss_backward
+
+    def spy(self):
+        fn = original(self)
+        used.append(fn is not self._loss_backward)
+        return fn
+
+    monkeypatch.setattr(PPOTrainer, "_compiled_loss_backward", spy)
+    m = train(train_cfg("resume=true", *opts), tmp_path)
+    assert m["training"]["updates"] == 4 and used == [True, True]

@@ -119,6 +119,7 @@ def make_loss(cfg: TrainConfig, actor, critic) -> tuple[ClipPPOLoss, GAE]:
         actor,
         critic,
         clip_epsilon=float(c.clip_epsilon),
+        entropy_bonus=float(c.entropy_coeff) > 0,  # no Monte-Carlo entropy sample when unused
         entropy_coeff=float(c.entropy_coeff),
         critic_coeff=float(c.critic_coeff),
         loss_critic_type=str(c.loss_critic_type),

@@ -65,6 +65,7 @@ class TrainSettings:
     stop_after_updates: int | None = None
     progress: bool = True
     compare_baselines: bool = False
+    compile: bool = False  # torch.compile of loss + backward (rl.trainer)
 
     def __post_init__(self) -> None:
         def k(key: str) -> str:
@@ -98,6 +99,7 @@ class TrainSettings:
             as_float(k("reward_scale"), self.reward_scale, lambda v: v > 0,
                      "'auto' or a number > 0")
         as_bool(k("progress"), self.progress)
+        as_bool(k("compile"), self.compile)
         as_bool(k("compare_baselines"), self.compare_baselines)
 
 

@@ -40,6 +40,7 @@ RESUME_FREE_KEYS = {
     "kernel",
     "policy",
     "train.progress",
+    "train.compile",
     "train.compare_baselines",
     "train.stop_after_updates",
     "train.checkpoint_every",

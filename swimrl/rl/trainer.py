@@ -33,6 +33,7 @@ from pathlib import Path
 
 import torch
 from tensordict import TensorDict
+from torch.profiler import record_function
 from tqdm.auto import tqdm
 
 from swimrl.evaluation.rollout import EvalSetup, evaluate
@@ -40,6 +41,7 @@ from swimrl.policies.files import checkpoint_path, load_file, policy_meta, polic
 from swimrl.policies.networks import deterministic_actor, log_std
 from swimrl.rl import builders as rlb
 from swimrl.rl.checkpoint import capture_rng, restore_rng, save_checkpoint
+from swimrl.rl.curves import write_curves
 from swimrl.rl.plan import TrainConfig, TrainPlan
 
 log = logging.getLogger(__name__)
@@ -77,6 +79,7 @@ class PPOTrainer:
         self.counters = {"frames": 0, "updates": 0, "wall_s": 0.0}
         self.meta = policy_meta(params, cfg.model, str(dtype).replace("torch.", ""))
         self.config = cfg.record
+        self._loss_fn = None  # built on the first update (see _compiled_loss_backward)
         self.logger = None
         self.last_eval: dict | None = None
         self.last_train_r_hat: float | None = None
@@ -105,6 +108,7 @@ class PPOTrainer:
         )
         if self.logger is not None:
             self.logger.experiment.flush()
+            write_curves(self.run_dir)
         return path
 
     def restore(self, path: Path) -> dict:
@@ -149,31 +153,55 @@ class PPOTrainer:
         self.logger.log_scalar("eval/R_hat_vs_episodes", m["R_hat_mean"], round(self.episodes))
 
     # -- one update ---------------------------------------------------------------------------
+    def _loss_backward(self, batch: TensorDict) -> TensorDict:
+        """``ClipPPOLoss`` on one minibatch and the backward pass of
+        ``loss_objective + loss_entropy + loss_critic``; returns the detached loss terms."""
+        out = self.loss(batch)
+        total = out["loss_objective"] + out["loss_critic"]
+        if "loss_entropy" in out.keys():  # noqa: SIM118 (TensorDict)
+            total = total + out["loss_entropy"]
+        total.backward()
+        return out.detach()
+
+    def _compiled_loss_backward(self):
+        """:meth:`_loss_backward`, compiled with ``torch.compile`` when ``train.compile`` is
+        set (as TorchRL's ``sota-implementations/ppo``: one graph for loss and backward;
+        compiled lazily, on the first minibatch), else eager."""
+        if self._loss_fn is None:
+            self._loss_fn = self._loss_backward
+            if self.cfg.train.compile:
+                self._loss_fn = torch.compile(self._loss_backward, dynamic=False)
+        return self._loss_fn
+
     def update(self, data: TensorDict) -> dict[str, torch.Tensor]:
         """GAE + ``epochs x minibatches`` clipped-PPO steps on one batch; mean loss terms."""
         plan = self.plan
-        with torch.no_grad():
+        with torch.no_grad(), record_function("ppo/gae"):
             data = self.gae(data)
         flat = data.select(*self._loss_keys(data), strict=False).reshape(-1)
         n, mb = flat.numel(), plan.minibatch_size
-        sums = {k: torch.zeros((), device=self.device) for k in LOSS_LOG_KEYS}
+        sums: dict[str, torch.Tensor] = {}
         clip = self.cfg.optim.max_grad_norm
         groups = [list(self.actor.parameters()), list(self.critic.parameters())]
+        step = self._compiled_loss_backward()
         for _ in range(plan.epochs):
             perm = torch.randperm(n, device=flat.device)
             for k in range(plan.minibatches_per_epoch):
-                out = self.loss(flat[perm[k * mb : (k + 1) * mb]])
-                total = out["loss_objective"] + out["loss_entropy"] + out["loss_critic"]
-                total.backward()
-                if clip is not None:
-                    for g in groups:
-                        torch.nn.utils.clip_grad_norm_(g, float(clip))
-                for opt in self.optimizers:
-                    opt.step()
-                    opt.zero_grad(set_to_none=True)
+                with record_function("ppo/minibatch"):
+                    batch = flat[perm[k * mb : (k + 1) * mb]]
+                with record_function("ppo/loss_backward"):
+                    out = step(batch)
+                with record_function("ppo/clip_optimizer"):
+                    if clip is not None:
+                        for g in groups:
+                            torch.nn.utils.clip_grad_norm_(g, float(clip))
+                    for opt in self.optimizers:
+                        opt.step()
+                        opt.zero_grad(set_to_none=True)
                 for key in LOSS_LOG_KEYS:
                     if key in out.keys():  # noqa: SIM118 (TensorDict)
-                        sums[key] += out[key].detach().float().mean()
+                        v = out[key].float().mean()
+                        sums[key] = sums[key] + v if key in sums else v
         for sch in self.schedulers:
             sch.step()
         steps = plan.gradient_steps_per_update

@@ -1,0 +1,130 @@
+"""Throughput of PPO training: env frames/s, seconds per update, overall frames/s, breakdown.
+
+Builds the training stack of ``swimrl-train`` for each variant (a list of config overrides
+on top of ``--preset``), then alternates the variants update by update (A/B/A/B...: the
+machine's drift hits all of them alike) and prints, per variant, the median over
+``--updates`` measured updates (after ``--warmup`` updates: ``torch.compile`` builds its
+graph on the first one) of
+
+* collection (``Collector`` rollout of ``frames_per_batch`` frames), env frames/s;
+* the PPO update (GAE + ``epochs x minibatches`` gradient steps), seconds;
+* overall frames/s = ``frames_per_batch / (collect + update)``;
+* the update's breakdown from ``torch.profiler`` labels (``ppo/gae``, ``ppo/minibatch``,
+  ``ppo/loss_backward``, ``ppo/clip_optimizer``) over one profiled update.
+
+Variants (``--variants``, comma-separated):
+
+* ``before``: the update as it was before the compiled path: eager, and ``ClipPPOLoss``
+  computing the Monte-Carlo entropy of the ``TanhNormal`` although its coefficient is 0
+  (``entropy_bonus=True``);
+* ``eager``: no entropy sample when the coefficient is 0, eager;
+* ``compiled``: the same with ``train.compile=true`` (what the presets use).
+
+    python benchmarks/bench_train.py --preset bigbatch --kubo 10 --updates 5
+"""
+
+from __future__ import annotations
+
+import argparse
+import statistics
+import time
+from pathlib import Path
+
+import torch
+from hydra import compose, initialize_config_module
+from torch.profiler import profile
+
+from swimrl.config import train_config
+from swimrl.rl import builders as rlb
+from swimrl.rl.plan import make_plan
+from swimrl.rl.trainer import PPOTrainer
+
+VARIANTS = {
+    "before": ["train.compile=false"],
+    "eager": ["train.compile=false"],
+    "compiled": ["train.compile=true"],
+}
+LABELS = ("ppo/gae", "ppo/minibatch", "ppo/loss_backward", "ppo/clip_optimizer")
+
+
+class Variant:
+    """One training stack and its collector iterator."""
+
+    def __init__(self, name: str, overrides: list[str], run_dir: Path):
+        with initialize_config_module("swimrl.conf", version_base="1.3"):
+            cfg = train_config(compose("train", overrides=overrides + VARIANTS[name]))
+        plan = make_plan(cfg)
+        cfg.runtime.apply()
+        device, dtype = cfg.runtime.device, cfg.runtime.dtype
+        self.name, self.plan = name, plan
+        self.trainer = PPOTrainer(cfg, plan, run_dir / name, device, dtype)
+        if name == "before":
+            self.trainer.loss.entropy_bonus = True
+        self.collector = rlb.make_collector(
+            self.trainer.env, self.trainer.actor, plan, 10**12, device
+        )
+        self.batches = iter(self.collector)
+        self.collect_s: list[float] = []
+        self.update_s: list[float] = []
+
+    def step(self, record: bool) -> None:
+        t0 = time.perf_counter()
+        data = next(self.batches)
+        t1 = time.perf_counter()
+        self.trainer.update(data)
+        self.collector.update_policy_weights_()
+        t2 = time.perf_counter()
+        if record:
+            self.collect_s.append(t1 - t0)
+            self.update_s.append(t2 - t1)
+
+    def breakdown(self) -> dict[str, float]:
+        """Seconds per label over one profiled update (profiler overhead included)."""
+        data = next(self.batches)
+        with profile() as prof:
+            self.trainer.update(data)
+        totals = {e.key: e.cpu_time_total * 1e-6 for e in prof.key_averages() if e.key in LABELS}
+        return {k: totals.get(k, 0.0) for k in LABELS}
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--preset", default="bigbatch")
+    ap.add_argument("--kubo", default="10")
+    ap.add_argument("--variants", default="before,compiled")
+    ap.add_argument("--updates", type=int, default=5)
+    ap.add_argument("--warmup", type=int, default=2)
+    ap.add_argument("--threads", type=int, default=1)
+    ap.add_argument("--out", default="/tmp/swimrl_bench_train")
+    ap.add_argument("overrides", nargs="*", help="extra config overrides")
+    args = ap.parse_args()
+    torch.set_num_threads(args.threads)
+    base = [f"train_preset={args.preset}", f"flow.kubo={args.kubo}", "seed=0", "threads=1"]
+    base += list(args.overrides)
+    variants = [Variant(v, base, Path(args.out)) for v in args.variants.split(",")]
+    for i in range(args.warmup + args.updates):
+        for v in variants:
+            v.step(record=i >= args.warmup)
+    fpb = variants[0].plan.frames_per_batch
+    print(f"preset={args.preset} Ku={args.kubo} frames/update={fpb} threads={args.threads} "
+          f"(median of {args.updates} updates, variants interleaved)")
+    head = f"{'variant':<10}{'env frames/s':>14}{'collect s':>11}{'update s':>10}{'frames/s':>10}"
+    print(head + "".join(f"{k.split('/')[1]:>16}" for k in LABELS))
+    overall = {}
+    for v in variants:
+        c, u = statistics.median(v.collect_s), statistics.median(v.update_s)
+        overall[v.name] = fpb / (c + u)
+        parts = v.breakdown()
+        print(
+            f"{v.name:<10}{fpb / c:>14.0f}{c:>11.3f}{u:>10.3f}{overall[v.name]:>10.0f}"
+            + "".join(f"{parts[k]:>16.3f}" for k in LABELS)
+        )
+    names = list(overall)
+    for n in names[1:]:
+        print(f"speed-up {n} / {names[0]}: {overall[n] / overall[names[0]]:.2f}x overall")
+    for v in variants:
+        v.collector.shutdown()
+
+
+if __name__ == "__main__":
+    main()

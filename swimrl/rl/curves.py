@@ -1,0 +1,79 @@
+"""Training curves of a run: the TensorBoard scalars that matter, as one CSV.
+
+One row per logged step (frames), one column per tag; a step logged twice (a resumed run
+repeats the updates after its last checkpoint) keeps the value written last. The CSV is
+small enough to commit next to the run's policy, so training-curve figures can be drawn
+from a fresh clone without the event files.
+
+    python -m swimrl.rl.curves RUN_DIR [--out RUN_DIR/curves.csv]
+"""
+
+from __future__ import annotations
+
+import argparse
+import csv
+import math
+import os
+from pathlib import Path
+
+#: Tags exported by default (see the monitoring table of docs/training.md).
+CURVE_TAGS = (
+    "eval/R_hat",
+    "eval/R_hat_sem",
+    "train/R_hat",
+    "train/episodes",
+    "policy/std",
+    "policy/abs_action_mean",
+    "train/kl_approx",
+    "train/clip_fraction",
+    "train/explained_variance",
+    "train/loss_critic",
+    "train/lr_actor",
+    "train/lr_critic",
+    "time/frames_per_s",
+)
+
+
+def read_scalars(run_dir: Path, tags=CURVE_TAGS) -> dict[int, dict[str, float]]:
+    """``{frames: {tag: value}}`` from every event file under ``run_dir/tb`` (by wall time,
+    so the last write of a step wins)."""
+    from tensorboard.backend.event_processing.event_accumulator import EventAccumulator
+
+    events = []
+    for path in sorted(Path(run_dir, "tb").rglob("events.out.tfevents.*")):
+        acc = EventAccumulator(str(path), size_guidance={"scalars": 0})
+        acc.Reload()
+        for tag in set(acc.Tags()["scalars"]) & set(tags):
+            events += [(e.wall_time, e.step, tag, e.value) for e in acc.Scalars(tag)]
+    rows: dict[int, dict[str, float]] = {}
+    for _, step, tag, value in sorted(events):
+        rows.setdefault(int(step), {})[tag] = float(value)
+    return rows
+
+
+def write_curves(run_dir: Path, out: Path | None = None, tags=CURVE_TAGS) -> Path:
+    """Write ``curves.csv`` (``frames`` then one column per tag; empty where not logged)."""
+    out = Path(out) if out is not None else Path(run_dir) / "curves.csv"
+    rows = read_scalars(Path(run_dir), tags)
+    tmp = out.with_suffix(out.suffix + ".tmp")
+    with open(tmp, "w", newline="") as fh:
+        w = csv.writer(fh)
+        w.writerow(["frames", *tags])
+        for step in sorted(rows):
+            vals = [rows[step].get(t) for t in tags]
+            w.writerow([step] + ["" if v is None or not math.isfinite(v) else f"{v:.6g}"
+                                 for v in vals])
+    os.replace(tmp, out)
+    return out
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("run_dir", type=Path)
+    ap.add_argument("--out", type=Path, default=None)
+    args = ap.parse_args()
+    print(write_curves(args.run_dir, args.out))
+
+
+if __name__ == "__main__":
+    main()
