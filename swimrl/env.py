@@ -32,7 +32,7 @@ from tensordict import TensorDict, TensorDictBase
 from torchrl.data import Bounded, Categorical, Composite, Unbounded
 from torchrl.envs import EnvBase
 
-from swimrl.errors import ConfigError, require
+from swimrl.errors import ConfigError, as_float
 from swimrl.flows.base import GriddedFlow
 from swimrl.flows.build import FlowSpec, build_flow
 from swimrl.physics.integrator import select_kernel
@@ -71,22 +71,15 @@ class EnvParams:
     n_decisions: int = field(init=False)
 
     def __post_init__(self) -> None:
-        require(self.swim_speed >= 0, "swimmer.swim_speed", self.swim_speed, ">= 0 (units u_rms)")
-        require(self.rot_diffusion >= 0, "swimmer.rot_diffusion", self.rot_diffusion, ">= 0")
-        require(self.dt > 0, "episode.dt", self.dt, "> 0 (units tau_K)")
-        require(self.update_interval > 0, "episode.update_interval", self.update_interval, "> 0")
-        require(
-            self.update_interval <= self.duration,
-            "episode.update_interval",
-            self.update_interval,
-            f"<= episode.duration={self.duration}",
-        )
-        require(
-            0 < self.shape_factor_max < 1,
-            "swimmer.shape_factor_max",
-            self.shape_factor_max,
-            "in (0, 1)",
-        )
+        as_float("swimmer.swim_speed", self.swim_speed, lambda v: v > 0, "> 0 (units u_rms)")
+        as_float("swimmer.rot_diffusion", self.rot_diffusion, lambda v: v >= 0,
+                 ">= 0 (units 1/tau_K)")
+        as_float("episode.duration", self.duration, lambda v: v > 0, "> 0 (units tau_K)")
+        as_float("episode.dt", self.dt, lambda v: v > 0, "> 0 (units tau_K)")
+        as_float("episode.update_interval", self.update_interval,
+                 lambda v: 0 < v <= self.duration, f"in (0, episode.duration={self.duration}]")
+        as_float("swimmer.shape_factor_max", self.shape_factor_max, lambda v: 0 < v < 1,
+                 "in (0, 1)")
         signal_indices(self.signals)
         object.__setattr__(
             self,

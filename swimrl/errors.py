@@ -17,6 +17,14 @@ class ConfigError(ValueError):
     """A config value outside its allowed range (one line naming key, value and range)."""
 
 
+class BadFileError(ValueError):
+    """An input file that cannot be read as what it should be (one line naming its path)."""
+
+
+class NonFiniteError(ArithmeticError):
+    """A computed value (loss, parameter, result) that is NaN or infinite: nothing is written."""
+
+
 def fail(key: str, value, allowed: str) -> None:
     """Raise ``ConfigError("KEY=VALUE is invalid: allowed RANGE")``."""
     raise ConfigError(f"{key}={value!r} is invalid: allowed {allowed}")
@@ -29,11 +37,17 @@ def require(ok: bool, key: str, value, allowed: str) -> None:
 
 
 def as_float(key: str, value, ok: Callable[[float], bool], allowed: str) -> float:
-    """``value`` as a finite float (not a bool) with ``ok(value)``."""
+    """``value`` as a finite float (not a bool) with ``ok(value)``.
+
+    NaN and infinities are always rejected; their message says that a finite number is
+    needed (``allowed a finite number > 0``).
+    """
     try:
         f = math.nan if isinstance(value, bool) else float(value)
     except (TypeError, ValueError):
         f = math.nan
+    if not math.isfinite(f) and not allowed.startswith(("a ", "an ", "null")):
+        allowed = f"a finite number {allowed}"
     require(math.isfinite(f) and ok(f), key, value, allowed)
     return f
 

@@ -14,7 +14,7 @@ from pathlib import Path
 
 import torch
 
-from swimrl.errors import key_prefix, require
+from swimrl.errors import as_float, as_int, key_prefix, require
 from swimrl.flows.base import GriddedFlow
 from swimrl.flows.dns.params import DNSParams
 from swimrl.flows.dns.spinup import SpinupSchedule
@@ -36,11 +36,11 @@ class StochasticSpec:
     name: str = "stochastic"
 
     def __post_init__(self) -> None:
-        require(self.kubo > 0, "flow.kubo", self.kubo, "> 0 (e.g. 0.1, 1, 10, 1e7)")
-        require(self.n_modes >= 1, "flow.n_modes", self.n_modes, "integer >= 1")
+        as_float("flow.kubo", self.kubo, lambda v: v > 0, "> 0 (e.g. 0.1, 1, 10, 1e7)")
+        as_int("flow.n_modes", self.n_modes)
         n = self.n_grid
-        require(n >= 4 and n % 2 == 0, "flow.n_grid", n, "even integer >= 4")
-        require(self.spacing > 0, "flow.spacing", self.spacing, "> 0 (units ell_f)")
+        require(as_int("flow.n_grid", n, low=4) % 2 == 0, "flow.n_grid", n, "an even integer >= 4")
+        as_float("flow.spacing", self.spacing, lambda v: v > 0, "> 0 (units ell_f)")
 
 
 @dataclass(frozen=True)
@@ -71,14 +71,11 @@ class LiveDNSSpec:
     name: str = "dns"
 
     def __post_init__(self) -> None:
-        for key in ("spinup_time", "measure_time", "interval_tau_k"):
-            require(getattr(self, key) > 0, f"flow.{key_name(key)}", getattr(self, key), "> 0")
-        require(
-            self.measure_time <= self.spinup_time,
-            "flow.spinup.measure_time",
-            self.measure_time,
-            f"<= flow.spinup.time={self.spinup_time}",
-        )
+        for key in ("spinup_time", "interval_tau_k"):
+            as_float(f"flow.{key_name(key)}", getattr(self, key), lambda v: v > 0, "> 0")
+        as_float("flow.spinup.measure_time", self.measure_time,
+                 lambda v: 0 < v <= self.spinup_time,
+                 f"in (0, flow.spinup.time={self.spinup_time}]")
 
     @property
     def spinup(self) -> SpinupSchedule:

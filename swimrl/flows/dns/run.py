@@ -26,7 +26,7 @@ from typing import Any
 import zarr
 from tqdm import tqdm
 
-from swimrl.errors import as_float, as_int, one_of, require
+from swimrl.errors import as_float, as_int, one_of
 from swimrl.flows.base import CHANNELS
 from swimrl.flows.dns import diagnostics as diag
 from swimrl.flows.dns.params import DNSParams
@@ -72,8 +72,8 @@ class DNSRun:
         as_int("store.chunk_times", self.chunk_times)
         as_float("store.checkpoint_seconds", self.checkpoint_seconds, lambda v: v > 0, "> 0")
         as_int("store.diag_every", self.diag_every)
-        require(self.max_steps is None or self.max_steps >= 1, "max_steps", self.max_steps,
-                "null or an integer >= 1")
+        if self.max_steps is not None:
+            as_int("max_steps", self.max_steps)
 
     @property
     def spinup(self) -> SpinupSchedule:
