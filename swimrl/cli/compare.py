@@ -12,22 +12,30 @@ constant shape factors, ``naive_scan.png`` (``R_hat`` against ``Lambda``).
 from __future__ import annotations
 
 import logging
+from pathlib import Path
 
 from omegaconf import DictConfig
 
 from swimrl.analysis.plots import plot_naive_scan
 from swimrl.cli import command, run_dir
 from swimrl.config import compare_config
-from swimrl.evaluation.compare import compare
+from swimrl.evaluation.compare import CompareConfig, compare
 from swimrl.evaluation.records import refuse_overwrite, write_comparison
 
 log = logging.getLogger(__name__)
 
 
-def _main(cfg: DictConfig) -> dict:
+def check(cfg: DictConfig, out: Path | None) -> CompareConfig:
+    """Parse and check the config; refuse to replace a result."""
     c = compare_config(cfg)
+    if out is not None:
+        refuse_overwrite(out / "comparison.json", c.overwrite)
+    return c
+
+
+def _main(cfg: DictConfig) -> dict:
     out = run_dir()
-    refuse_overwrite(out / "comparison.json", c.overwrite)
+    c = check(cfg, out)
     record = compare(c)
     print(write_comparison(record, out), flush=True)
     plot_naive_scan(record, out / "naive_scan.png")
@@ -35,12 +43,12 @@ def _main(cfg: DictConfig) -> dict:
     return record
 
 
-@command("compare")
+@command("compare", check=check)
 def main(cfg: DictConfig) -> dict:
     return _main(cfg)
 
 
-@command("naive_scan")
+@command("naive_scan", check=check)
 def main_naive_scan(cfg: DictConfig) -> dict:
     return _main(cfg)
 

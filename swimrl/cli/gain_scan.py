@@ -14,7 +14,7 @@ from swimrl.cli import command
 from swimrl.config import gain_scan_config
 
 
-@command("gain_scan")
+@command("gain_scan", check=lambda cfg, out: gain_scan_config(cfg))
 def main(cfg: DictConfig) -> None:
     print(markdown(gain_scan(gain_scan_config(cfg))))
 

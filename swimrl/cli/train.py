@@ -3,6 +3,7 @@ r"""``swimrl-train``: PPO training of the shape-control policy (paper Sec. II C,
     swimrl-train flow.kubo=10                                 # default preset (this CPU)
     swimrl-train train_preset=paper flow.kubo=10 seed=1       # paper: 5000 episodes
     swimrl-train hydra.run.dir=outputs/train/ku10 resume=true # continue a killed run
+                                                              # (a finished one: no-op)
     swimrl-train -m flow.kubo=0.1,1,10,1e7 seed=0,1,2 hydra/launcher=joblib
 
 Writes into the run directory ``checkpoints/last.pt``, ``policy.pt``, ``tb/`` (TensorBoard)
@@ -16,10 +17,10 @@ from omegaconf import DictConfig
 
 from swimrl.cli import command, run_dir
 from swimrl.config import train_config
-from swimrl.rl.run import train
+from swimrl.rl.run import check_run, train
 
 
-@command("train")
+@command("train", check=lambda cfg, out: check_run(train_config(cfg), out))
 def main(cfg: DictConfig) -> dict | None:
     return train(train_config(cfg), run_dir())
 

@@ -2,7 +2,8 @@
 
 ``metrics.json`` (``swimrl-eval``, ``swimrl-train``), ``comparison.json`` (``swimrl-compare``)
 and the other records are written with :func:`write_json` (``*.tmp`` then
-:func:`os.replace`; an existing record is never replaced unless asked). Every table the
+:func:`os.replace`; an existing record is never replaced unless asked; standard JSON only: a
+record holding NaN or an infinity is refused and nothing is written). Every table the
 commands print or write goes through :func:`markdown_table` / :func:`csv_table`.
 """
 
@@ -11,8 +12,11 @@ from __future__ import annotations
 import csv
 import io
 import json
+import math
 from collections.abc import Sequence
 from pathlib import Path
+
+from swimrl.errors import NonFiniteError
 
 
 def refuse_overwrite(path: Path, overwrite: bool) -> None:
@@ -21,12 +25,30 @@ def refuse_overwrite(path: Path, overwrite: bool) -> None:
         raise FileExistsError(f"{path} exists; pass overwrite=true to replace it")
 
 
+def nonfinite_entry(record, key: str = "") -> str | None:
+    """``KEY=VALUE`` of the first NaN or infinite number in ``record`` (nested), else None."""
+    if isinstance(record, float) and not math.isfinite(record):
+        return f"{key or 'value'}={record}"
+    items = record.items() if isinstance(record, dict) else (
+        enumerate(record) if isinstance(record, list | tuple) else ())
+    for k, v in items:
+        found = nonfinite_entry(v, f"{key}.{k}" if key else str(k))
+        if found is not None:
+            return found
+    return None
+
+
 def write_json(record: dict, path: Path, overwrite: bool = True) -> Path:
-    """Write ``record`` as JSON atomically (refusing to replace ``path`` unless ``overwrite``)."""
+    """Write ``record`` as standard JSON atomically (refusing to replace ``path`` unless
+    ``overwrite``); a NaN or infinite number raises :class:`~swimrl.errors.NonFiniteError`
+    and nothing is written."""
     path = Path(path)
     refuse_overwrite(path, overwrite)
+    bad = nonfinite_entry(record)
+    if bad is not None:
+        raise NonFiniteError(f"{path} not written: {bad} is not finite")
     tmp = path.with_suffix(path.suffix + ".tmp")
-    tmp.write_text(json.dumps(record, indent=2))
+    tmp.write_text(json.dumps(record, indent=2, allow_nan=False))
     tmp.replace(path)
     return path
 

@@ -32,7 +32,7 @@ import yaml
 from tensordict.nn import TensorDictModule
 
 from swimrl.env import EnvParams
-from swimrl.errors import ConfigError
+from swimrl.errors import BadFileError, ConfigError
 from swimrl.policies.networks import ModelSpec, action_spec, deterministic_actor, tanh_normal_actor
 
 CHECKPOINT_FORMAT = "swimrl-ppo-checkpoint/1"
@@ -68,8 +68,23 @@ def atomic_save(obj, path: Path) -> Path:
 
 
 def load_file(path: Path, map_location="cpu") -> dict:
-    """Load a checkpoint or policy file (tensors and plain containers only)."""
-    return torch.load(Path(path), map_location=map_location, weights_only=True)
+    """Load a checkpoint or policy file (tensors and plain containers only: ``weights_only``).
+
+    A file that is truncated, corrupt, not a torch file or not a swimrl-train file raises
+    :class:`~swimrl.errors.BadFileError` naming its path.
+    """
+    path = Path(path)
+    try:
+        data = torch.load(path, map_location=map_location, weights_only=True)
+    except FileNotFoundError:
+        raise
+    except Exception as err:  # noqa: BLE001 - torch raises many types for a bad file
+        reason = (str(err).strip().splitlines() or [type(err).__name__])[0][:120]
+        raise BadFileError(f"{path} cannot be read as a swimrl-train policy or checkpoint "
+                           f"(truncated, corrupt or another kind of file: {reason})") from err
+    if not isinstance(data, dict) or data.get("format") not in (CHECKPOINT_FORMAT, POLICY_FORMAT):
+        raise BadFileError(f"{path} is not a swimrl-train policy or checkpoint")
+    return data
 
 
 def env_params_dict(params: EnvParams) -> dict:
@@ -192,8 +207,6 @@ def load_policy(spec: str, params: EnvParams) -> TensorDictModule:
     ``Lambda_max`` it was trained with (the environment clamps to its own)."""
     path = resolve_policy_file(spec)
     data = load_file(path, map_location="cpu")
-    if not isinstance(data, dict) or data.get("format") not in (CHECKPOINT_FORMAT, POLICY_FORMAT):
-        raise ValueError(f"policy={spec!r}: {path} is not a swimrl-train policy or checkpoint")
     check_signals(spec, data["signals"], params.signals)
     model = data["model"]
     dtype = getattr(torch, str(model.get("dtype", "float32")))

@@ -3,6 +3,7 @@ r"""Atomic checkpoints of a training run (the exported policy: :mod:`swimrl.poli
 Layout of a run directory::
 
     <run>/checkpoints/last.pt   full training state (this module), replaced atomically
+    <run>/checkpoints/prev.pt   the checkpoint before it (resumed from if last.pt is corrupt)
     <run>/policy.pt             the final actor + metadata (what ``load_policy`` prefers)
     <run>/metrics.json          final held-out evaluation (the run is finished when it exists)
     <run>/tb/ppo/               TensorBoard events
@@ -13,16 +14,24 @@ shuffling, and the environment's generator, which drives flows and initial condi
 the counters (frames, updates, episodes, wall time), the resolved config, the signal
 names, the env parameters and the network shape. Files are written to ``*.tmp`` and moved
 with :func:`os.replace`, so a kill at any moment (even ``kill -9``) leaves either the
-previous or the new checkpoint, never a truncated one.
+previous or the new checkpoint, never a truncated one. The previous ``last.pt`` is kept as
+``prev.pt`` (a hard link made before the replacement, so ``last.pt`` always exists): a
+``last.pt`` damaged later (a full disk, a copy cut short) is reported by path and the run
+resumes from ``prev.pt`` (:func:`load_checkpoint`).
 """
 
 from __future__ import annotations
 
+import logging
+import os
 from pathlib import Path
 
 import torch
 
-from swimrl.policies.files import CHECKPOINT_FORMAT, atomic_save
+from swimrl.errors import BadFileError
+from swimrl.policies.files import CHECKPOINT_FORMAT, atomic_save, checkpoint_path, load_file
+
+log = logging.getLogger(__name__)
 
 #: Config keys renamed since a checkpoint may have been written: old key -> new key.
 LEGACY_KEYS = {
@@ -88,7 +97,13 @@ def save_checkpoint(
     config: dict,
     meta: dict,
 ) -> Path:
-    """Write the full training state atomically."""
+    """Write the full training state atomically; the previous ``path`` becomes ``prev.pt``."""
+    path = Path(path)
+    if path.exists():
+        prev, tmp = previous_path(path), path.with_name("prev.pt.tmp")
+        tmp.unlink(missing_ok=True)
+        os.link(path, tmp)
+        os.replace(tmp, prev)
     return atomic_save(
         {
             "format": CHECKPOINT_FORMAT,
@@ -103,3 +118,28 @@ def save_checkpoint(
         },
         path,
     )
+
+
+def previous_path(last: Path) -> Path:
+    """``prev.pt`` next to ``last.pt``: the checkpoint written before it."""
+    return Path(last).with_name("prev.pt")
+
+
+def load_checkpoint(run_dir: Path, map_location="cpu") -> tuple[Path, dict]:
+    """``(path, state)`` of the newest readable checkpoint of ``run_dir``: ``last.pt``, or
+    ``prev.pt`` (with a warning naming the bad ``last.pt``) if ``last.pt`` is corrupt."""
+    last = checkpoint_path(run_dir)
+    try:
+        return last, load_file(last, map_location)
+    except BadFileError as err:
+        prev = previous_path(last)
+        if not prev.exists():
+            raise BadFileError(f"{err}; no prev.pt to fall back to: delete {last} to start "
+                               "again, or pass overwrite=true") from err
+        try:
+            state = load_file(prev, map_location)
+        except BadFileError as err2:
+            raise BadFileError(f"{last} and {prev} are both unreadable ({err2}); pass "
+                               "overwrite=true to start again") from err2
+        log.warning("%s; resuming from the previous checkpoint %s", err, prev)
+        return prev, state

@@ -5,9 +5,11 @@ Rules for the run directory (checked before any compute):
 * ``metrics.json`` exists (the run finished): error unless ``overwrite=true``, which deletes
   the run's outputs (``checkpoints/``, ``policy.pt``, ``metrics.json``, ``tb/``) and trains
   from scratch;
+  ``resume=true`` on a finished run prints "already finished" and does nothing (exit 0);
 * ``checkpoints/last.pt`` exists: error unless ``resume=true`` (continue) or
   ``overwrite=true`` (start again). ``resume=true`` without a checkpoint starts fresh, so a
-  sweep can always be (re)launched with ``resume=true``;
+  sweep can always be (re)launched with ``resume=true``: finished jobs are skipped, killed
+  ones continue, missing ones start;
 * a resumed run must have the same config as the checkpoint (whose renamed keys are first
   moved to their current names, :func:`~swimrl.rl.checkpoint.upgrade_config`), except for
   the runtime keys in :data:`RESUME_FREE_KEYS` and the ``eval.*`` / periodic evaluation
@@ -24,8 +26,8 @@ from pathlib import Path
 from swimrl.errors import ConfigError
 from swimrl.evaluation.compare import CompareConfig, compare, strategy_variants
 from swimrl.evaluation.records import flatten, summary_line, write_comparison, write_json
-from swimrl.policies.files import checkpoint_path, load_file
-from swimrl.rl.checkpoint import upgrade_config
+from swimrl.policies.files import checkpoint_path
+from swimrl.rl.checkpoint import load_checkpoint, upgrade_config
 from swimrl.rl.plan import TrainConfig, make_plan
 from swimrl.rl.trainer import PPOTrainer
 
@@ -73,44 +75,60 @@ def clean_run_dir(out: Path) -> None:
         (out / name).unlink(missing_ok=True)
 
 
-def prepare_run_dir(cfg: TrainConfig, out: Path) -> bool:
-    """Apply the run-directory rules; returns True when a checkpoint is to be resumed."""
+def run_dir_state(cfg: TrainConfig, out: Path) -> str:
+    """What a run in ``out`` does under the run-directory rules, without touching ``out``:
+    ``"fresh"``, ``"resume"``, ``"finished"`` (``resume=true`` on a finished run: nothing to
+    do) or ``"overwrite"``; raises ``FileExistsError`` for a refused rerun."""
     metrics, ckpt = out / "metrics.json", checkpoint_path(out)
-    if metrics.exists() and not cfg.overwrite:
+    if cfg.overwrite:
+        return "overwrite"
+    if metrics.exists():
+        if cfg.resume:
+            return "finished"
         raise FileExistsError(
             f"{metrics} exists: this run is finished; pass overwrite=true to train it again "
-            "from scratch"
+            "from scratch (resume=true does nothing on a finished run)"
         )
-    if ckpt.exists() and not cfg.overwrite and not cfg.resume:
+    if ckpt.exists() and not cfg.resume:
         raise FileExistsError(
             f"{ckpt} exists: pass resume=true to continue this run, or overwrite=true to "
             "start it again"
         )
-    if cfg.overwrite:
-        clean_run_dir(out)
-        return False
-    return ckpt.exists()
+    return "resume" if ckpt.exists() else "fresh"
+
+
+def check_run(cfg: TrainConfig, out: Path | None) -> str | None:
+    """Everything checked before any compute: the derived sizes (:func:`make_plan`) and, for a
+    known run directory ``out``, the run-directory rules (:func:`run_dir_state`)."""
+    make_plan(cfg)
+    return None if out is None else run_dir_state(cfg, Path(out))
 
 
 def train(cfg: TrainConfig, out: Path) -> dict | None:
-    """Train (or resume) in ``out``; returns the final metrics, or None if stopped early."""
+    """Train (or resume) in ``out``; returns the final metrics, or None if stopped early or
+    already finished."""
     out = Path(out)
     plan = make_plan(cfg)
     cfg.runtime.apply()
     device, dtype = cfg.runtime.device, cfg.runtime.dtype
-    resuming = prepare_run_dir(cfg, out)
+    state = run_dir_state(cfg, out)
+    if state == "finished":
+        print(f"{out}: already finished (metrics.json exists); nothing to do", flush=True)
+        return None
+    if state == "overwrite":
+        clean_run_dir(out)
+    resuming = state == "resume"
     if resuming:
-        old = upgrade_config(load_file(checkpoint_path(out))["config"])
-        diffs = config_differences(old, cfg.record)
+        ckpt, state = load_checkpoint(out)
+        diffs = config_differences(upgrade_config(state["config"]), cfg.record)
         if diffs:
             raise ConfigError(
-                f"resume=true with a config that differs from {checkpoint_path(out)}: "
-                + "; ".join(diffs)
+                f"resume=true with a config that differs from {ckpt}: " + "; ".join(diffs)
             )
     out.mkdir(parents=True, exist_ok=True)
     trainer = PPOTrainer(cfg, plan, out, device, dtype)
     if resuming:
-        trainer.restore(checkpoint_path(out))
+        trainer.restore(ckpt)
         log.info(
             "resumed %s at update %d/%d (%d frames)",
             out,

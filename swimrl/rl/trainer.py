@@ -36,6 +36,7 @@ from tensordict import TensorDict
 from torch.profiler import record_function
 from tqdm.auto import tqdm
 
+from swimrl.errors import NonFiniteError
 from swimrl.evaluation.rollout import EvalSetup, evaluate
 from swimrl.policies.files import checkpoint_path, load_file, policy_meta, policy_path, save_policy
 from swimrl.policies.networks import deterministic_actor, log_std
@@ -250,6 +251,7 @@ class PPOTrainer:
                 lrs = [s.get_last_lr()[0] for s in self.schedulers]
                 action_abs = data["action"].abs().mean()
                 stats = self.update(data)
+                self._stop_if_nonfinite(stats)
                 collector.update_policy_weights_()
                 t_done = time.perf_counter()
                 self.counters["frames"] += plan.frames_per_batch
@@ -299,6 +301,22 @@ class PPOTrainer:
             bar.close()
             collector.shutdown()
         return self.finished_training
+
+    def _stop_if_nonfinite(self, stats: dict[str, torch.Tensor]) -> None:
+        """:class:`NonFiniteError` at the first NaN/inf loss term or parameter; the last
+        checkpoint (written before this update) is kept as it is."""
+        bad = [f"{k}={float(v)}" for k, v in stats.items() if not torch.isfinite(v).all()]
+        for net, module in (("actor", self.actor), ("critic", self.critic)):
+            bad += [f"{net} parameter {name}" for name, p in module.named_parameters()
+                    if not torch.isfinite(p).all()]
+        if bad:
+            ck = checkpoint_path(self.run_dir)
+            kept = f"the last good checkpoint {ck} is kept" if ck.exists() else "no checkpoint"
+            raise NonFiniteError(
+                f"training stopped at update {self.counters['updates'] + 1}: "
+                f"{', '.join(bad[:3])} not finite; {kept} (lower optim.lr_actor / "
+                "optim.lr_critic, or check the flow and swimmer parameters)"
+            )
 
     def close(self) -> None:
         if self.logger is not None:
