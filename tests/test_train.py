@@ -243,11 +243,11 @@ def test_kill_and_resume_round_trip(train_cfg, tmp_path, monkeypatch):
     assert sorted(set(steps)) == [80, 160, 240, 320]
     assert saved[4]["sched"][0]["last_epoch"] == 4
 
-    # a finished run is never silently overwritten
-    for extra in ((), ("resume=true",)):
-        with pytest.raises(FileExistsError, match="overwrite=true"):
-            train(train_cfg(*extra), tmp_path)
+    # a finished run is never silently overwritten; resume=true on it does nothing
     before = (tmp_path / "metrics.json").read_text()
+    with pytest.raises(FileExistsError, match="overwrite=true"):
+        train(train_cfg(), tmp_path)
+    assert train(train_cfg("resume=true"), tmp_path) is None
     assert (tmp_path / "metrics.json").read_text() == before
 
 
