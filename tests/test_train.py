@@ -26,6 +26,7 @@ from .conftest import SMALL
 
 # 2 flows x 4 swimmers, episodes of N = 20 decisions, batches of L = 10: 4 updates
 TINY = SMALL + [
+    "train.compile=false",
     "train.n_flows=2",
     "train.n_swimmers=4",
     "train.frames_per_batch=80",
@@ -65,8 +66,9 @@ def scalars(run_dir) -> dict[str, list[tuple[int, float]]]:
     return {t: [(e.step, e.value) for e in ea.Scalars(t)] for t in ea.Tags()["scalars"]}
 
 
-def test_ppo_end_to_end(train_cfg, tmp_path):
-    cfg = train_cfg("train.compare_baselines=true")
+@pytest.mark.parametrize("anneal", ["linear", "none"])
+def test_ppo_end_to_end(train_cfg, tmp_path, anneal):
+    cfg = train_cfg("train.compare_baselines=true", f"optim.anneal={anneal}")
     metrics = train(cfg, tmp_path)
     assert math.isfinite(metrics["R_hat_mean"]) and metrics["R_hat_mean"] > 0
     assert metrics["seed"] == EVAL_SEED_OFFSET and metrics["strategy"] == "policy"
@@ -106,7 +108,8 @@ def test_ppo_end_to_end(train_cfg, tmp_path):
     assert (tmp_path / "comparison.md").read_text().startswith("Ku = ")
     lr = [v for _, v in s["train/lr_actor"]]
     lr0 = cfg.optim.lr_actor
-    assert lr == pytest.approx([lr0 * (1 - u / 4) for u in range(4)], rel=1e-5)
+    factor = (lambda u: 1 - u / 4) if anneal == "linear" else (lambda u: 1.0)
+    assert lr == pytest.approx([lr0 * factor(u) for u in range(4)], rel=1e-5)
 
 
 def test_validation_precedes_compute(train_cfg, tmp_path, monkeypatch):
@@ -344,13 +347,14 @@ def test_slurm_launcher_preset_composes():
 
 
 def test_bigbatch_preset_extends_default():
-    """``train_preset=bigbatch``: the default preset's loss and learning rates, 64 flows."""
+    """``train_preset=bigbatch``: the default sizes, loss and learning rates, annealed."""
     from hydra import compose, initialize_config_module
 
     with initialize_config_module("swimrl.conf", version_base="1.3"):
         default = compose("train")
         big = compose("train", overrides=["train_preset=bigbatch", "train.total_frames=1e7"])
     assert (big.train.n_flows, big.train.n_swimmers) == (64, 8)
+    assert (big.optim.anneal, default.optim.anneal) == ("linear", "none")
     assert big.train.frames_per_batch == 64 * 8 * 100 and big.train.minibatch_size == 2560
     for key in ("optim.lr_actor", "optim.lr_critic", "loss.entropy_coeff", "loss.gae_lambda"):
         sect, k = key.split(".")
@@ -393,6 +397,7 @@ def test_resume_a_checkpoint_written_before_the_key_renames(compose_cfg, tmp_pat
     assert load_file(data / "last.pt")["config"]["episode"]["shape_factor_max"] == 0.95
     overrides = [o.replace("episode.shape_factor_max", "swimmer.shape_factor_max")
                  for o in expected["overrides"]]
+    overrides += ["optim.anneal=linear", "train.compile=false"]  # that code's defaults
     checkpoint_path(tmp_path).parent.mkdir(parents=True)
     shutil.copy(data / "last.pt", checkpoint_path(tmp_path))
     with pytest.raises(ConfigError, match="swimmer.shape_factor_max"):
