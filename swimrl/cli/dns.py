@@ -14,10 +14,10 @@ from omegaconf import DictConfig, OmegaConf
 
 from swimrl.cli import command
 from swimrl.config import dns_run, runtime
-from swimrl.flows.dns.run import run_dns, summary
+from swimrl.flows.dns.run import check_run, run_dns, summary
 
 
-@command("dns")
+@command("dns", check=lambda cfg, out: check_run(dns_run(cfg)))
 def main(cfg: DictConfig) -> None:
     run = dns_run(cfg)
     threads = runtime(cfg).threads

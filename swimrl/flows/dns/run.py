@@ -33,7 +33,7 @@ from swimrl.flows.dns.params import DNSParams
 from swimrl.flows.dns.spinup import ScaleMeter, SpinupSchedule
 from swimrl.flows.dns.state import random_state, zero_state
 from swimrl.flows.dns.stepper import DNS
-from swimrl.flows.dns.store import CHANNEL_UNITS, open_run_store
+from swimrl.flows.dns.store import CHANNEL_UNITS, check_run_store, open_run_store
 
 INIT_KINDS = ("rest", "random")
 
@@ -141,6 +141,13 @@ def _meter_attrs(meter: ScaleMeter, prefix: str) -> dict[str, float]:
     return {prefix + "u2": meter.u2, prefix + "grad2": meter.grad2, prefix + "count": meter.count}
 
 
+def check_run(run: DNSRun) -> str:
+    """What :func:`run_dns` will do with the store (``"create"``, ``"replace"``,
+    ``"resume"``), checked without touching it; raises for a store it refuses."""
+    return check_run_store(run.path, run_attrs(run), RESUME_KEYS, bool(run.overwrite),
+                           int(run.n_times) if run.extend else None)
+
+
 def run_dns(run: DNSRun) -> Path:
     """Run (or resume) the DNS described by ``run``; returns the store path."""
     params = run.params
@@ -153,8 +160,11 @@ def run_dns(run: DNSRun) -> Path:
     dns = DNS(params, batch=1, seeds=[int(run.seed)])
     dns.state = _initial_state(run, dns)
     prog: dict[str, Any] = dict(writer.attrs)
-    if resumed and writer.has_checkpoint():
+    if resumed and int(prog.get("step", 0)) > 0:
         w, rng = writer.load_checkpoint()
+        if not bool(w.any()):
+            raise FileExistsError(f"{path}: the checkpoint of step {prog['step']} is all zeros "
+                                  "(damaged); pass store.overwrite=true to start again")
         dns.state.omega_hat = w[None].to(dns.grid.device, dns.grid.complex_dtype)
         dns.state.step = int(prog["step"])
         dns.state.t = dns.state.step * params.dt

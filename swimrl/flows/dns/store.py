@@ -7,7 +7,8 @@ Layout (zarr format 3, consolidated metadata, readable with ``xarray.open_zarr(p
                                          retained modes only: ky = -K..K, kx = 0..K
     time (time) float64, ky (ky) int32, kx (kx) int32     coordinates (integer wavenumbers)
     diagnostics/  time series (t, E, Z, rates) every ``diag_every`` steps
-    checkpoint/   solver state (complex128, same packing, unnormalised) + RNG state
+    checkpoint/   solver state (complex128, same packing, unnormalised) + RNG state, as
+                  omega_hat_<v>, rng_<v>; the attribute checkpoint_version = v points to it
 
 Channels ``(u_x, u_y, S_xx, S_xy, omega)`` are reconstructed from ``omega_hat`` by spectral
 differentiation (:func:`swimrl.flows.dns.state.flow_channels`); they equal the solver's own
@@ -15,10 +16,20 @@ fields up to the float32 rounding of the stored coefficients (~1e-7 relative), a
 size of five float32 node fields. Root attributes hold the parameters, ``dt_store``,
 ``u_rms``, ``tau_k``, channel names and units, and the run's progress (``status``,
 ``n_written``); ``n_written`` is the commit marker: data beyond it is discarded on resume.
+
+A checkpoint is written atomically: the new state goes into arrays under a new version
+``v`` (the previous ones untouched), then one attribute update (the commit, with
+``n_written`` and the progress) switches ``checkpoint_version`` to ``v``; older versions
+are deleted only after that. A kill at any moment leaves the previous checkpoint, with the
+attributes that match it, or the new one; a store whose progress says there is a solver
+state that cannot be read is refused, never restarted from rest.
 """
 
 from __future__ import annotations
 
+import hashlib
+import json
+import logging
 import math
 import shutil
 import warnings
@@ -29,7 +40,10 @@ import numpy as np
 import torch
 import zarr
 
+from swimrl.errors import ConfigError
 from swimrl.flows.dns.grid import dealias_cutoff
+
+log = logging.getLogger(__name__)
 
 FORMAT_VERSION = 1
 CHANNEL_UNITS = ("L/T", "L/T", "1/T", "1/T", "1/T")
@@ -65,6 +79,24 @@ def store_status(path: str | Path) -> str | None:
     if "format_version" not in g.attrs:
         return "unknown"
     return str(g.attrs.get("status", "unknown"))
+
+
+def store_record(path: str | Path) -> dict[str, Any]:
+    """Provenance of the store at ``path`` for a result file: absolute path, ``status``,
+    ``n_written`` and ``content_hash``, the SHA-256 of the root attributes (parameters,
+    measured scales, progress) and of the committed ``time`` array and first and last
+    snapshots (the whole store would take minutes to hash at 512^2)."""
+    path = Path(path).resolve()
+    g = zarr.open_group(str(path), mode="r", use_consolidated=False)
+    attrs = dict(g.attrs)
+    n = int(attrs.get("n_written", 0))
+    h = hashlib.sha256(json.dumps(attrs, sort_keys=True, default=str).encode())
+    h.update(np.asarray(g["time"][:n]).tobytes())
+    if n:
+        h.update(np.asarray(g["omega_hat"][0]).tobytes())
+        h.update(np.asarray(g["omega_hat"][n - 1]).tobytes())
+    return {"path": str(path), "status": str(attrs.get("status")), "n_written": n,
+            "content_hash": "sha256:" + h.hexdigest()}
 
 
 class DNSStoreWriter:
@@ -157,32 +189,73 @@ class DNSStoreWriter:
     # -- commit / checkpoint --------------------------------------------------------------
     def save_checkpoint(self, omega_hat: torch.Tensor, rng_state: torch.Tensor | None,
                         **progress: Any) -> None:
-        """Store the solver state (complex128) and RNG, then commit ``progress`` attrs."""
+        """Store the solver state (complex128) and RNG under a new version, then commit
+        ``progress`` and the version in one attribute update; then drop older versions."""
+        version = self.checkpoint_version + 1
         ck = self.group["checkpoint"]
         state = pack(omega_hat.detach(), self.n).to(torch.complex128).cpu().numpy()
-        ck.create_array("omega_hat", shape=state.shape, dtype="complex128", overwrite=True,
-                        fill_value=0)[...] = state
+        self._write_array(ck, f"omega_hat_{version}", state)
         if rng_state is not None:
-            rs = rng_state.cpu().numpy().astype(np.uint8)
-            ck.create_array("rng", shape=rs.shape, dtype="uint8", overwrite=True,
-                            fill_value=0)[...] = rs
-        self.commit(**progress)
+            self._write_array(ck, f"rng_{version}", rng_state.cpu().numpy().astype(np.uint8))
+        self.commit(checkpoint_version=version, **progress)
+        self._drop_checkpoints_except(version)
+
+    @staticmethod
+    def _write_array(group: zarr.Group, name: str, data: np.ndarray) -> None:
+        """``data`` as the array ``name`` of ``group`` (replacing a leftover of a killed run)."""
+        group.create_array(name, shape=data.shape, dtype=data.dtype, overwrite=True,
+                           fill_value=0)[...] = data
+
+    def _drop_checkpoints_except(self, version: int) -> None:
+        """Delete checkpoint arrays of other versions (after the commit of ``version``)."""
+        ck = self.group["checkpoint"]
+        keep = {f"omega_hat_{version}", f"rng_{version}"}
+        old = [k for k in ck.array_keys() if k not in keep]
+        for name in old:
+            del ck[name]
+        if old:
+            self._consolidate()
+
+    @property
+    def checkpoint_version(self) -> int:
+        """Version of the committed checkpoint (-1: none; 0 for a store of the first layout,
+        whose arrays are named ``omega_hat`` and ``rng``)."""
+        v = self.group.attrs.get("checkpoint_version")
+        if v is None:
+            return 0 if "omega_hat" in self.group["checkpoint"] else -1
+        return int(v)
+
+    def _names(self) -> tuple[str, str]:
+        v = self.checkpoint_version
+        legacy = self.group.attrs.get("checkpoint_version") is None
+        return ("omega_hat", "rng") if legacy else (f"omega_hat_{v}", f"rng_{v}")
 
     def load_checkpoint(self) -> tuple[torch.Tensor, torch.Tensor | None]:
         """``(omega_hat (N, N//2+1) complex128, rng_state or None)`` from the checkpoint."""
         ck = self.group["checkpoint"]
-        w = unpack(torch.from_numpy(np.asarray(ck["omega_hat"][...])), self.n)
-        rng = torch.from_numpy(np.asarray(ck["rng"][...])) if "rng" in ck else None
+        w_name, rng_name = self._names()
+        try:
+            w = unpack(torch.from_numpy(np.asarray(ck[w_name][...])), self.n)
+        except (KeyError, ValueError, OSError) as err:
+            raise FileExistsError(
+                f"{self.path}: the checkpoint {w_name} of step {self.group.attrs.get('step')} "
+                f"cannot be read ({err}); the run cannot be resumed: pass store.overwrite=true "
+                "to start it again") from err
+        rng = torch.from_numpy(np.asarray(ck[rng_name][...])) if rng_name in ck else None
         return w, rng
 
     def has_checkpoint(self) -> bool:
-        """Whether a solver state has been checkpointed."""
-        return "omega_hat" in self.group["checkpoint"]
+        """Whether a solver state has been checkpointed (committed)."""
+        return self.checkpoint_version >= 0
 
     def commit(self, **attrs: Any) -> None:
         """Make appended data part of the run: update ``n_written``/``n_diag`` and ``attrs``."""
         self.group.attrs.update({**attrs, "n_written": self._pending_written,
                                  "n_diag": self._pending_diag})
+        self._consolidate()
+
+    def _consolidate(self) -> None:
+        """Rewrite the consolidated metadata (what readers of the store see)."""
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")
             zarr.consolidate_metadata(str(self.path))
@@ -198,6 +271,40 @@ class DNSStoreWriter:
         self._pending_written, self._pending_diag = n, nd
 
 
+def check_run_store(path: str | Path, attrs: dict[str, Any], compare_keys: tuple[str, ...],
+                    overwrite: bool = False, extend_to: int | None = None) -> str:
+    """What :func:`open_run_store` will do with ``path``, without touching it: ``"create"``,
+    ``"replace"`` or ``"resume"``; raises for a store it refuses (see there)."""
+    path = Path(path)
+    status = store_status(path)
+    if status == "unknown":
+        raise FileExistsError(f"{path} exists and is not a swimrl DNS store; it is never deleted:"
+                              " remove it by hand or choose another path")
+    if status is None:
+        return "create"
+    if overwrite:
+        return "replace"
+    stored = dict(zarr.open_group(str(path), mode="r", use_consolidated=False).attrs)
+    if status == "complete":
+        n_have = int(stored.get("n_written", 0))
+        if extend_to is None:
+            raise FileExistsError(f"{path} holds a finished DNS store; set store.overwrite=true "
+                                  "to replace it, store.extend=true with store.n_times > "
+                                  f"{n_have} to append to it, or choose another path")
+        if int(extend_to) <= n_have:
+            raise ConfigError(f"store.n_times={extend_to} is invalid: allowed > {n_have} (the "
+                              f"snapshots already in {path}) with store.extend=true")
+    for k in compare_keys:
+        if not _same(stored.get(k), attrs.get(k)):
+            if int(stored.get("step", 0)) == 0 and "checkpoint_version" not in stored:
+                return "replace"  # a run that failed before its first checkpoint: nothing lost
+            raise FileExistsError(
+                f"cannot resume {path}: {k}={stored.get(k)!r} in the store but "
+                f"{attrs.get(k)!r} requested; set store.overwrite=true to start it again, or "
+                "choose another store.path")
+    return "resume"
+
+
 def open_run_store(path: str | Path, attrs: dict[str, Any], compare_keys: tuple[str, ...],
                    overwrite: bool = False, chunk_times: int = 1,
                    extend_to: int | None = None) -> tuple[DNSStoreWriter, bool]:
@@ -211,34 +318,18 @@ def open_run_store(path: str | Path, attrs: dict[str, Any], compare_keys: tuple[
     * anything else at ``path`` that is not a swimrl DNS store: :class:`FileExistsError`, even
       with ``overwrite`` (it is never deleted);
     * unfinished store: resume if ``attrs[k]`` equals the stored value for every ``k`` in
-      ``compare_keys`` (else :class:`ValueError` naming the first differing key), or recreate
-      if ``overwrite``.
+      ``compare_keys``, or recreate if ``overwrite`` or if the store holds no checkpoint yet
+      (a run that failed at once); else :class:`FileExistsError` naming the first differing
+      key and ``store.overwrite=true``.
     """
     path = Path(path)
-    status = store_status(path)
-    if status == "unknown":
-        raise FileExistsError(f"{path} exists and is not a swimrl DNS store; it is never deleted:"
-                              " remove it by hand or choose another path")
-    if status is not None and overwrite:
+    action = check_run_store(path, attrs, compare_keys, overwrite, extend_to)
+    if action == "replace":
+        log.info("replacing %s", path)
         shutil.rmtree(path)
-        status = None
-    if status is None:
+    if action != "resume":
         return DNSStoreWriter.create(path, attrs, chunk_times), False
     writer = DNSStoreWriter(path)
-    if status == "complete":
-        n_have = int(writer.attrs.get("n_written", 0))
-        if extend_to is None:
-            raise FileExistsError(f"{path} holds a finished DNS store; set overwrite=true to "
-                                  "replace it, store.extend=true with store.n_times > "
-                                  f"{n_have} to append to it, or choose another path")
-        if int(extend_to) <= n_have:
-            raise ValueError(f"store.extend=true needs store.n_times > {n_have} (the snapshots "
-                             f"already in {path}), got {extend_to}")
-    stored = writer.attrs
-    for k in compare_keys:
-        if not _same(stored.get(k), attrs.get(k)):
-            raise ValueError(f"cannot resume {path}: {k}={stored.get(k)!r} in the store but "
-                             f"{attrs.get(k)!r} requested; set overwrite=true or use another path")
     writer.rollback()
     return writer, True
 
