@@ -110,7 +110,10 @@ def flow_spec(flow: DictConfig, rt: Runtime) -> FlowSpec:
             spacing=_float(flow.spacing),
         )
     if flow.name == "dns_replay":
-        return StoredRunSpec(Path(str(flow.path)))
+        return StoredRunSpec(
+            Path(str(flow.path)),
+            allow_incomplete=as_bool("flow.allow_incomplete", flow.get("allow_incomplete", False)),
+        )
     return LiveDNSSpec(
         dns=live_dns_params(OmegaConf.to_container(flow.dns), rt.device, rt.dtype),
         spinup_time=_float(flow.spinup.time),

@@ -29,7 +29,8 @@ from tqdm.auto import tqdm
 
 from swimrl.env import EnvParams, SwimmerEnv
 from swimrl.errors import ConfigError, as_int
-from swimrl.flows.build import FlowSpec
+from swimrl.flows.build import FlowSpec, StoredRunSpec
+from swimrl.flows.dns.store import store_record
 from swimrl.policies.baselines import StrategySpec, build_strategy
 from swimrl.policies.files import load_policy
 from swimrl.runtime import Runtime
@@ -173,8 +174,10 @@ def evaluate_shared(setup: EvalSetup, actors: Sequence[Actor], desc: str = "eval
     substeps = n_flows * k * s * params.n_decisions * params.n_substeps
     how = "averaged over flow chunks" + (f", shared by {k} strategies" if k > 1 else "")
     flow_stats = mean_flow_stats(stats, how)
+    store = ({"flow_store": store_record(setup.flow.path)}
+             if isinstance(setup.flow, StoredRunSpec) else {})
     return [{**flow_statistics(per_flow[j]), "n_flows": n_flows, "n_swimmers": s,
-             "seed": setup.seed, "flow_stats": flow_stats, "wall_s": wall,
+             "seed": setup.seed, "flow_stats": flow_stats, **store, "wall_s": wall,
              "swimmer_substeps_per_s": substeps / sim_s, "config": setup.record}
             for j in range(k)]
 

@@ -18,6 +18,7 @@ from swimrl.errors import as_float, as_int, key_prefix, require
 from swimrl.flows.base import GriddedFlow
 from swimrl.flows.dns.params import DNSParams
 from swimrl.flows.dns.spinup import SpinupSchedule
+from swimrl.flows.dns.store import store_status
 from swimrl.flows.replay import ReplayFlow
 from swimrl.flows.sources import DNSStore, LiveDNS
 from swimrl.flows.stochastic import StochasticFlow
@@ -48,16 +49,16 @@ class StoredRunSpec:
     """``flow=dns_replay``: a run stored by ``swimrl-dns`` at ``path``."""
 
     path: Path
+    allow_incomplete: bool = False
     name: str = "dns_replay"
 
     def __post_init__(self) -> None:
-        p = Path(self.path)
-        require(
-            (p / "zarr.json").exists() or (p / ".zgroup").exists(),
-            "flow.path",
-            str(self.path),
-            "a DNS store made by swimrl-dns (see docs/dns.md)",
-        )
+        status = store_status(self.path)
+        require(status not in (None, "unknown"), "flow.path", str(self.path),
+                "a DNS store made by swimrl-dns (see docs/dns.md)")
+        require(status == "complete" or self.allow_incomplete, "flow.path", str(self.path),
+                f"a finished DNS store (this one's status is {status!r}: finish it with "
+                "swimrl-dns, or pass flow.allow_incomplete=true to replay what it holds)")
 
 
 @dataclass(frozen=True)
