@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import argparse
 import json
+from pathlib import Path
 
 import torch
 
@@ -12,16 +13,21 @@ from swimrl.analysis.dns_plots import make_plots
 
 
 def main(argv: list[str] | None = None) -> dict:
-    """``swimrl-dns-plots <store> [--out DIR] [--snapshots M]``."""
+    """``swimrl-dns-plots <store> [--out DIR] [--snapshots M]``; by default the figures go
+    next to the store, into ``<store>_plots/`` (never into the repository's ``docs/``)."""
     ap = argparse.ArgumentParser(description="Figures of a stored swimrl DNS run")
     ap.add_argument("store")
-    ap.add_argument("--out", default="docs/img")
+    ap.add_argument("--out", default=None,
+                    help="directory of the figures (default: <store>_plots next to the store)")
     ap.add_argument("--snapshots", type=int, default=50, help="snapshots averaged (evenly spaced)")
     ap.add_argument("--fit", type=float, nargs=2, default=(6.0, 40.0),
                     help="k range of the spectral slope fit")
     args = ap.parse_args(argv)
+    if args.snapshots < 1:
+        ap.error(f"--snapshots {args.snapshots}: allowed an integer >= 1")
+    out = args.out or str(Path(args.store).with_suffix("")) + "_plots"
     torch.set_num_threads(1)
-    summary = make_plots(args.store, args.out, args.snapshots, tuple(args.fit))
+    summary = make_plots(args.store, out, args.snapshots, tuple(args.fit))
     print(json.dumps(summary, indent=1))
     return summary
 

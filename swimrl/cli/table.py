@@ -12,7 +12,7 @@ import argparse
 import sys
 from pathlib import Path
 
-from swimrl.analysis.table import build_rows, collect, markdown, to_csv
+from swimrl.analysis.table import build_rows, collect, markdown, swept_keys, to_csv
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -31,6 +31,11 @@ def main(argv: list[str] | None = None) -> int:
     records = collect(args.dir)
     if not records:
         p.error(f"no metrics.json or comparison.json below {args.dir}")
+    swept = swept_keys(records)
+    for key in args.average:
+        if key not in swept:
+            p.error(f"--average {key}: not a key that varies between these results "
+                    f"(allowed: {', '.join(swept) or 'none'})")
     keys, rows = build_rows(records, args.average)
     md = markdown(keys, rows)
     if args.md:
