@@ -1,0 +1,100 @@
+"""Training curves from committed ``curves.csv`` records (written by ``swimrl-train``).
+
+    python -m swimrl.analysis.training_curves OUT.png LABEL=RUN_OR_CSV [LABEL=...]
+        [--tag eval/R_hat] [--reference LABEL=VALUE ...]
+
+Each curve is one column of a run's ``curves.csv`` (``frames`` and one column per
+TensorBoard tag; empty cells where a tag was not logged) against frames; the periodic
+held-out evaluation ``eval/R_hat`` is drawn with its SEM band when ``eval/R_hat_sem`` is
+there.
+"""
+
+from __future__ import annotations
+
+import argparse
+import csv
+from pathlib import Path
+
+import numpy as np
+
+
+def read_curves(path: Path) -> dict[str, np.ndarray]:
+    """Columns of a ``curves.csv`` (a run directory or the file) as float arrays (NaN where
+    empty)."""
+    path = Path(path)
+    if path.is_dir():
+        path = path / "curves.csv"
+    with open(path, newline="") as fh:
+        rows = list(csv.DictReader(fh))
+    if not rows:
+        return {}
+    return {k: np.array([float(r[k]) if r[k] else np.nan for r in rows]) for k in rows[0]}
+
+
+def plot_training_curves(
+    runs: dict[str, Path],
+    out: Path,
+    tag: str = "eval/R_hat",
+    references: dict[str, float] | None = None,
+    title: str | None = None,
+) -> dict[str, tuple[np.ndarray, np.ndarray]]:
+    """``tag`` against frames for each labelled run (+- SEM band for ``eval/R_hat``) and
+    horizontal reference lines; returns ``{label: (frames, values)}`` of what was drawn."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    fig, ax = plt.subplots(figsize=(6, 4))
+    drawn = {}
+    for label, path in runs.items():
+        c = read_curves(path)
+        ok = np.isfinite(c[tag])
+        x, y = c["frames"][ok], c[tag][ok]
+        (line,) = ax.plot(x / 1e6, y, marker="o", ms=3, label=label)
+        sem_tag = tag + "_sem"
+        if sem_tag in c:
+            s = c[sem_tag][ok]
+            ax.fill_between(x / 1e6, y - s, y + s, color=line.get_color(), alpha=0.2)
+        drawn[label] = (x, y)
+    for i, (label, value) in enumerate((references or {}).items()):
+        ax.axhline(value, color=f"C{len(runs) + i}", ls="--", lw=1, label=label)
+    ax.set_xlabel("training frames (millions of decisions)")
+    ax.set_ylabel(r"held-out $\hat R$" if tag == "eval/R_hat" else tag)
+    if title:
+        ax.set_title(title, fontsize=9)
+    ax.legend(fontsize=8)
+    ax.grid(alpha=0.3)
+    fig.tight_layout()
+    Path(out).parent.mkdir(parents=True, exist_ok=True)
+    fig.savefig(out, dpi=120)
+    plt.close(fig)
+    return drawn
+
+
+def _pairs(items: list[str], what: str) -> dict[str, str]:
+    out = {}
+    for item in items:
+        if "=" not in item:
+            raise SystemExit(f"error: {what} {item!r} is invalid: allowed LABEL=VALUE")
+        label, value = item.rsplit("=", 1)
+        out[label] = value
+    return out
+
+
+def main(argv: list[str] | None = None) -> None:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("out", type=Path)
+    ap.add_argument("runs", nargs="+", help="LABEL=RUN_DIR_OR_CSV")
+    ap.add_argument("--tag", default="eval/R_hat")
+    ap.add_argument("--reference", nargs="*", default=[], help="LABEL=VALUE")
+    ap.add_argument("--title", default=None)
+    args = ap.parse_args(argv)
+    runs = {k: Path(v) for k, v in _pairs(args.runs, "run").items()}
+    refs = {k: float(v) for k, v in _pairs(args.reference, "--reference").items()}
+    plot_training_curves(runs, args.out, args.tag, refs, args.title)
+    print(args.out)
+
+
+if __name__ == "__main__":
+    main()
