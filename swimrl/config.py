@@ -129,6 +129,7 @@ def eval_sizes(node: DictConfig) -> EvalSizes:
         n_swimmers=_int(node.n_swimmers),
         flows_per_batch=_int(node.flows_per_batch),
         progress=as_bool("eval.progress", node.progress),
+        record=_int(node.get("record", 0)),
     )
 
 

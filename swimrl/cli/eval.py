@@ -2,6 +2,8 @@ r"""``swimrl-eval``: a strategy on fresh flow realisations -> ``metrics.json``.
 
     swimrl-eval strategy=sto flow.kubo=10 eval.n_flows=10 eval.n_swimmers=200
     swimrl-eval strategy=policy policy=pretrained/ku10 flow.kubo=10
+    swimrl-eval strategy=sto eval.record=5    # + trajectories.npz: every decision of 5
+                                              #   swimmers per flow
 """
 
 from __future__ import annotations
@@ -15,6 +17,7 @@ from swimrl.cli import command, run_dir
 from swimrl.config import eval_config
 from swimrl.evaluation.records import refuse_overwrite, summary_line, write_json
 from swimrl.evaluation.rollout import Actor, EvalConfig, actor_for, evaluate
+from swimrl.evaluation.trajectories import TRAJECTORY_FILE, TrajectoryRecorder, save_trajectories
 
 log = logging.getLogger(__name__)
 
@@ -31,7 +34,13 @@ def check(cfg: DictConfig, out: Path | None) -> tuple[EvalConfig, Actor]:
 def main(cfg: DictConfig) -> dict:
     target = run_dir() / "metrics.json"
     c, actor = check(cfg, run_dir())
-    metrics = evaluate(c.setup, actor, c.strategy.name)
+    n_record = c.setup.sizes.record
+    recorder = TrajectoryRecorder(n_record) if n_record else None
+    metrics = evaluate(c.setup, actor, c.strategy.name, recorder)
+    if recorder is not None:
+        path = save_trajectories(recorder.arrays(), run_dir() / TRAJECTORY_FILE,
+                                 [c.strategy.name], c.setup.record)
+        log.info("wrote %s", path)
     write_json(metrics, target, c.overwrite)
     print(summary_line(metrics))
     log.info("wrote %s", target)

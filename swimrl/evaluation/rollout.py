@@ -28,7 +28,7 @@ from torch import nn
 from tqdm.auto import tqdm
 
 from swimrl.env import EnvParams, SwimmerEnv
-from swimrl.errors import ConfigError, as_int
+from swimrl.errors import ConfigError, as_int, require
 from swimrl.flows.build import FlowSpec, StoredRunSpec
 from swimrl.flows.dns.store import store_record
 from swimrl.policies.baselines import StrategySpec, build_strategy
@@ -36,6 +36,7 @@ from swimrl.policies.files import load_policy
 from swimrl.runtime import Runtime
 
 from .statistics import flow_statistics, mean_flow_stats
+from .trajectories import TrajectoryRecorder
 
 #: A strategy to evaluate: a baseline (built against the environment's action spec) or an
 #: actor module (e.g. a loaded or a training policy).
@@ -44,16 +45,21 @@ Actor = StrategySpec | TensorDictModule
 
 @dataclass(frozen=True)
 class EvalSizes:
-    """``eval.*``: flows, swimmers per flow, flows simulated at once, progress bar."""
+    """``eval.*``: flows, swimmers per flow, flows simulated at once, progress bar, and the
+    number of swimmers per flow whose every decision is recorded (``record``, 0: none; see
+    :mod:`swimrl.evaluation.trajectories`)."""
 
     n_flows: int = 10
     n_swimmers: int = 200
     flows_per_batch: int = 10
     progress: bool = True
+    record: int = 0
 
     def __post_init__(self) -> None:
         for key in ("n_flows", "n_swimmers", "flows_per_batch"):
             as_int(f"eval.{key}", getattr(self, key))
+        require(as_int("eval.record", self.record, low=0) <= self.n_swimmers, "eval.record",
+                self.record, f"an integer in [0, eval.n_swimmers={self.n_swimmers}]")
 
 
 @dataclass(frozen=True)
@@ -142,9 +148,11 @@ class SplitActor(nn.Module):
         return td
 
 
-def evaluate_shared(setup: EvalSetup, actors: Sequence[Actor], desc: str = "eval") -> list[dict]:
+def evaluate_shared(setup: EvalSetup, actors: Sequence[Actor], desc: str = "eval",
+                    recorder: TrajectoryRecorder | None = None) -> list[dict]:
     """Per-strategy metrics (``R_hat_mean/std/sem``, ``per_flow``, ...) of ``actors`` on the
-    same flows, ``n_swimmers`` swimmers each (one actor: the plain evaluation)."""
+    same flows, ``n_swimmers`` swimmers each (one actor: the plain evaluation); ``recorder``
+    records every decision of its first swimmers of each flow and strategy."""
     sizes, params = setup.sizes, setup.params
     setup.runtime.apply()
     n_flows, per_batch, s, k = sizes.n_flows, sizes.flows_per_batch, sizes.n_swimmers, len(actors)
@@ -164,7 +172,11 @@ def evaluate_shared(setup: EvalSetup, actors: Sequence[Actor], desc: str = "eval
             modules = [m.to(setup.runtime.device) for m in modules]
             router = modules[0] if k == 1 else SplitActor(modules, s)
         t0 = time.perf_counter()
-        r_hat = run_episodes(env, router, bar).double()
+        if recorder is not None:
+            recorder.start(env, s, k)
+        r_hat = run_episodes(env, router, bar, on_decision=recorder).double()
+        if recorder is not None:
+            recorder.finish(r_hat)
         sim_s += time.perf_counter() - t0
         stats.append(env.flow.measured_stats())
         for j in range(k):
@@ -182,7 +194,8 @@ def evaluate_shared(setup: EvalSetup, actors: Sequence[Actor], desc: str = "eval
             for j in range(k)]
 
 
-def evaluate(setup: EvalSetup, actor: Actor, strategy: str) -> dict:
+def evaluate(setup: EvalSetup, actor: Actor, strategy: str,
+             recorder: TrajectoryRecorder | None = None) -> dict:
     """Metrics of one strategy (named ``strategy`` in the record) on ``setup``."""
-    (m,) = evaluate_shared(setup, [actor], desc=f"eval {strategy}")
+    (m,) = evaluate_shared(setup, [actor], desc=f"eval {strategy}", recorder=recorder)
     return {"strategy": strategy, **m}

@@ -1,0 +1,120 @@
+r"""Trajectory records: every decision of chosen swimmers of an evaluation (``eval.record``).
+
+A :class:`TrajectoryRecorder` passed to :func:`~swimrl.evaluation.rollout.evaluate_shared`
+keeps, for the first ``n`` swimmers of every flow and of every strategy block, at each
+decision ``i = 0 .. N-1`` (time ``t_i = i T_u``) the five signals and the action ``Lambda``,
+and at ``t_0 .. t_N`` the unwrapped position ``x = x_0 + (x - x_0)`` and the orientation
+angle ``theta``. The recorded swimmers are the evaluation's own (same flows, same initial
+conditions, same rollout), so ``|x(T) - x_0| / (v_s T)`` of a recorded swimmer is the
+``R_hat`` that enters the evaluation's statistics.
+
+The arrays (:meth:`TrajectoryRecorder.arrays`), with ``F`` flows, ``K`` strategies, ``n``
+swimmers and ``N`` decisions; lengths in ``l_f``, times in ``tau_K``, signals as in
+:mod:`swimrl.physics.signals`:
+
+* ``signals`` ``(F, K, n, N, 5)``, ``Lambda`` ``(F, K, n, N)`` (the action, clamped to
+  ``[-Lambda_max, Lambda_max]`` as the environment applies it);
+* ``position`` ``(F, K, n, N+1, 2)``, ``theta`` ``(F, K, n, N+1)``, ``time`` ``(N+1,)``;
+* ``R_hat`` ``(F, K, n)``, ``reference_distance`` ``v_s T``, ``box`` the period ``L``.
+"""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import numpy as np
+import torch
+from tensordict import TensorDictBase
+
+from swimrl.physics.signals import SIGNAL_NAMES
+
+#: File name of a trajectory record, next to ``metrics.json``.
+TRAJECTORY_FILE = "trajectories.npz"
+
+
+class TrajectoryRecorder:
+    """Collects every decision of the first ``n`` swimmers of each flow and strategy block."""
+
+    def __init__(self, n: int):
+        self.n = int(n)
+        self._chunks: list[dict[str, np.ndarray]] = []
+        self._cur: dict[str, list] = {}
+        self._env = None
+        self.meta: dict = {}
+
+    def start(self, env, block: int, n_blocks: int) -> None:
+        """A new flow chunk ``env`` with ``n_blocks`` strategy blocks of ``block`` swimmers."""
+        if self.n > block:
+            raise ValueError(f"eval.record={self.n} exceeds eval.n_swimmers={block}")
+        self._env = env
+        self._sel = torch.tensor([k * block + i for k in range(n_blocks) for i in range(self.n)],
+                                 device=env.device)
+        self._shape = (n_blocks, self.n)
+        self._cur = {"signals": [], "Lambda": [], "position": [], "theta": []}
+        self.meta = {"reference_distance": float(env.reference_distance),
+                     "tau_K": float(env.tau_k), "box": float(env.flow.grid.length),
+                     "update_interval": float(env.params.update_interval),
+                     "shape_factor_max": float(env.params.shape_factor_max)}
+
+    def _state(self) -> None:
+        env, sel = self._env, self._sel
+        start = env.start_pos + env.flow.grid.length * env.start_image.to(env.pos.dtype)
+        x = (start + env.displacement())[:, sel]
+        self._cur["position"].append(x.cpu())
+        self._cur["theta"].append(env.theta[:, sel].cpu())
+
+    def __call__(self, i: int, td: TensorDictBase) -> None:
+        """Decision ``i``: signals and action (before the step) and the state."""
+        lam_max = self._env.params.shape_factor_max
+        self._cur["signals"].append(td.get("signals")[:, self._sel].cpu())
+        self._cur["Lambda"].append(
+            td.get("action")[:, self._sel, 0].clamp(-lam_max, lam_max).cpu())
+        self._state()
+
+    def finish(self, r_hat: torch.Tensor) -> None:
+        """End of the chunk's episode: final state and the swimmers' ``R_hat`` ``(F, K S)``."""
+        self._state()
+        f = r_hat.shape[0]
+        shape = (f, *self._shape)
+        out = {k: torch.stack(v, dim=2).numpy() for k, v in self._cur.items()}
+        chunk = {k: v.reshape(shape + v.shape[2:]) for k, v in out.items()}
+        chunk["R_hat"] = r_hat[:, self._sel].cpu().double().numpy().reshape(shape)
+        self._chunks.append(chunk)
+        self._env = None
+
+    def arrays(self) -> dict[str, np.ndarray]:
+        """All chunks, concatenated along flows (see the module docstring)."""
+        out = {k: np.concatenate([c[k] for c in self._chunks]) for k in self._chunks[0]}
+        n_dec = out["Lambda"].shape[-1]
+        out["time"] = np.arange(n_dec + 1) * self.meta["update_interval"]
+        for k, v in self.meta.items():
+            out[k] = np.asarray(v)
+        return out
+
+
+def save_trajectories(arrays: dict[str, np.ndarray], path: Path, strategies: list[str],
+                      config: dict) -> Path:
+    """Write ``arrays`` (float32 where floating) with the strategy names, the signal names
+    and the resolved ``config`` (JSON) to ``path`` (``.npz``, compressed), atomically."""
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    data = {k: (v.astype(np.float32) if v.dtype.kind == "f" and v.ndim > 2 and k != "R_hat"
+                else v) for k, v in arrays.items()}
+    data["strategies"] = np.asarray(strategies)
+    data["signal_names"] = np.asarray(SIGNAL_NAMES)
+    data["config"] = np.asarray(json.dumps(config))
+    tmp = path.with_name(path.name + ".tmp.npz")
+    np.savez_compressed(tmp, **data)
+    tmp.replace(path)
+    return path
+
+
+def load_trajectories(path: Path) -> dict:
+    """A record written by :func:`save_trajectories` (``config`` parsed back to a dict)."""
+    with np.load(Path(path)) as z:
+        out = {k: z[k] for k in z.files}
+    out["config"] = json.loads(str(out["config"]))
+    out["strategies"] = [str(s) for s in out["strategies"]]
+    out["signal_names"] = [str(s) for s in out["signal_names"]]
+    return out
