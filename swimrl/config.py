@@ -17,6 +17,7 @@ from pathlib import Path
 
 from omegaconf import DictConfig, OmegaConf
 
+from swimrl.analysis.figures import FiguresConfig
 from swimrl.analysis.fit_minimal import FitConfig
 from swimrl.analysis.gain_scan import GainScanConfig
 from swimrl.env import EnvParams
@@ -108,6 +109,10 @@ def flow_spec(flow: DictConfig, rt: Runtime) -> FlowSpec:
             n_modes=_int(flow.n_modes),
             n_grid=_int(flow.n_grid),
             spacing=_float(flow.spacing),
+            basis=flow.get("basis", "redrawn"),
+            basis_seed=_int(flow.get("basis_seed", 0)),
+            amplitudes=flow.get("amplitudes", "stationary"),
+            velocity_scale=flow.get("velocity_scale", "total"),
         )
     if flow.name == "dns_replay":
         return StoredRunSpec(
@@ -199,6 +204,39 @@ def gain_scan_config(cfg: DictConfig) -> GainScanConfig:
     ev = eval_config(cfg)
     return GainScanConfig(setup=ev.setup, policy=ev.policy,
                           gains=tuple(_float(g) for g in cfg.gains))
+
+
+def figures_config(cfg: DictConfig) -> FiguresConfig:
+    """``swimrl-figures`` (``conf/figures.yaml``); paths are taken from the launch directory."""
+    from hydra.utils import to_absolute_path
+
+    from swimrl.analysis.figures import BUILDERS
+
+    rt = runtime(cfg)
+    spec = flow_spec(cfg.flow, rt)
+    one_of("flow.name", cfg.flow.name, ("stochastic",))
+    only = cfg.get("only")
+    if only is not None:
+        one_of("only", str(only), tuple(BUILDERS))
+    f = cfg.figures
+    return FiguresConfig(
+        out=Path(to_absolute_path(str(cfg.out))),
+        cache=Path(to_absolute_path(str(cfg.cache))),
+        runtime=rt,
+        params=env_params(cfg),
+        flow=spec,
+        only=None if only is None else str(only),
+        n_flows=as_int("figures.n_flows", f.n_flows),
+        n_swimmers=as_int("figures.n_swimmers", f.n_swimmers),
+        n_traj=as_int("figures.n_traj", f.n_traj),
+        robust_flows=as_int("figures.robust_flows", f.robust_flows),
+        robust_swimmers=as_int("figures.robust_swimmers", f.robust_swimmers),
+        seed=as_int("seed", cfg.seed, low=0),
+        policies=str(cfg.policies),
+        results=Path(to_absolute_path(str(cfg.results))),
+        curves=Path(to_absolute_path(str(cfg.curves))),
+        progress=as_bool("progress", cfg.progress),
+    )
 
 
 def _from_node(cls, node: DictConfig, **given):

@@ -1,0 +1,595 @@
+r"""The paper's figures from the shipped policies and the committed records (``swimrl-figures``).
+
+Each figure has a ``fig_<name>(data..., path)`` function that draws it from arrays and returns
+what it drew, and a builder (:data:`BUILDERS`) that gathers the arrays: evaluations through
+the one rollout loop with a :class:`~swimrl.evaluation.trajectories.TrajectoryRecorder`,
+cached under ``cache/`` as ``.npz`` files keyed by a hash of their inputs (the setup, the
+policy file's bytes, :data:`CACHE_VERSION`), so a second build only draws.
+
+Units: lengths in ``l_f``, times in ``tau_K``, signals in ``tau_K`` units. Colours: smart
+orange, naive (``Lambda = 0.98``) black, STO green (the paper's). Sizes (flows x swimmers,
+episode) are in each figure's title.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import time
+from collections.abc import Callable
+from dataclasses import asdict, dataclass, replace
+from pathlib import Path
+
+import numpy as np
+
+from swimrl.env import EnvParams, SwimmerEnv
+from swimrl.evaluation.rollout import EvalSetup, EvalSizes, chunk_seed, evaluate_shared
+from swimrl.evaluation.trajectories import TrajectoryRecorder
+from swimrl.flows.build import StochasticSpec
+from swimrl.policies.baselines import StrategySpec
+from swimrl.policies.files import load_policy, resolve_policy_file
+from swimrl.runtime import Runtime
+
+from .performance import load, summarise
+from .policy_maps import binned_mean, snn_extremes
+from .training_curves import read_curves
+
+#: Bump when a cached array's meaning changes.
+CACHE_VERSION = 1
+KUS = (0.1, 1.0, 10.0, 1e7)
+STRATEGIES = ("smart", "naive", "STO")
+COLORS = {"smart": "tab:orange", "naive": "k", "STO": "tab:green"}
+SIGNAL = {"n_r": 0, "n_theta": 1, "S_nn": 2, "S_np": 3, "omega": 4}
+LABEL = {"n_r": r"$n_r$", "n_theta": r"$n_\theta$", "S_nn": r"$S_{nn}\tau_K$",
+         "S_np": r"$S_{np}\tau_K$", "omega": r"$\omega\tau_K$"}
+
+
+def ku_name(kubo: float) -> str:
+    """``ku0.1``, ``ku1``, ``ku10``, ``ku1e7``: the shipped policies' names."""
+    return "ku" + (f"{kubo:g}".replace("e+0", "e").replace("e+", "e"))
+
+
+@dataclass(frozen=True)
+class FiguresConfig:
+    """``swimrl-figures``: where, which, and how large (defaults in ``conf/figures.yaml``)."""
+
+    out: Path
+    cache: Path
+    runtime: Runtime
+    params: EnvParams
+    flow: StochasticSpec
+    only: str | None = None
+    n_flows: int = 1
+    n_swimmers: int = 1000
+    n_traj: int = 8
+    robust_flows: int = 2
+    robust_swimmers: int = 100
+    seed: int = 0
+    policies: str = "pretrained"
+    results: Path = Path("docs/results/smart_ku_sweep")
+    curves: Path = Path("docs/results")
+    progress: bool = True
+
+
+# -- cache and evaluations -------------------------------------------------------------------
+def _digest(path: Path) -> str:
+    return hashlib.sha256(Path(path).read_bytes()).hexdigest()[:16]
+
+
+def cached(cfg: FiguresConfig, name: str, inputs: dict,
+           compute: Callable[[], dict[str, np.ndarray]]) -> dict[str, np.ndarray]:
+    """``compute()`` once per distinct ``inputs``: stored as ``cache/<name>-<hash>.npz``."""
+    text = json.dumps({"v": CACHE_VERSION, **inputs}, sort_keys=True, default=str)
+    path = Path(cfg.cache) / f"{name}-{hashlib.sha256(text.encode()).hexdigest()[:12]}.npz"
+    if path.exists():
+        with np.load(path) as z:
+            return {k: z[k] for k in z.files}
+    data = compute()
+    path.parent.mkdir(parents=True, exist_ok=True)
+    tmp = path.with_name(path.name + ".tmp.npz")
+    np.savez_compressed(tmp, **data)
+    tmp.replace(path)
+    return data
+
+
+def _setup(cfg: FiguresConfig, kubo: float, n_flows: int, n_swimmers: int,
+           **params) -> EvalSetup:
+    sizes = EvalSizes(n_flows, n_swimmers, n_flows, cfg.progress, n_swimmers)
+    return EvalSetup(flow=replace(cfg.flow, kubo=float(kubo)),
+                     params=replace(cfg.params, **params) if params else cfg.params,
+                     runtime=cfg.runtime, sizes=sizes, seed=cfg.seed, record={})
+
+
+def _policy(cfg: FiguresConfig, kubo: float) -> str:
+    return f"{cfg.policies}/{ku_name(kubo)}"
+
+
+def _inputs(cfg: FiguresConfig, setup: EvalSetup, actors: list[str]) -> dict:
+    files = {a: _digest(resolve_policy_file(a)) for a in actors if "/" in a}
+    return {"flow": asdict(setup.flow), "params": asdict(setup.params),
+            "sizes": [setup.sizes.n_flows, setup.sizes.n_swimmers], "seed": setup.seed,
+            "dtype": str(cfg.runtime.dtype), "actors": actors, "files": files}
+
+
+def _actor(name: str, params: EnvParams):
+    if name == "naive":
+        return StrategySpec("naive", shape_factor=0.98)
+    if name == "sto":
+        return StrategySpec("sto")
+    if name.startswith("naive("):
+        return StrategySpec("naive", shape_factor=float(name[6:-1]))
+    return load_policy(name, params)
+
+
+def record_strategies(setup: EvalSetup, actors: list[str], desc: str) -> dict[str, np.ndarray]:
+    """Every decision of every swimmer of ``actors`` (policy specs, ``naive``, ``sto``,
+    ``naive(L)``) sharing the flows of ``setup``: the recorder's arrays."""
+    rec = TrajectoryRecorder(setup.sizes.n_swimmers)
+    evaluate_shared(setup, [_actor(a, setup.params) for a in actors], desc=desc, recorder=rec)
+    return rec.arrays()
+
+
+def ku_record(cfg: FiguresConfig, kubo: float) -> dict[str, np.ndarray]:
+    """Smart (shipped policy), naive and STO at ``kubo`` on shared flows (cached):
+    ``final`` ``(3, F S, 2)`` displacements, ``R_hat`` ``(3, F S)``, ``traj`` ``(3, n_traj,
+    N+1, 2)`` displacements, smart's ``signals`` ``(F S, N, 5)`` and ``Lambda``, STO's for
+    the first ``n_traj`` swimmers of each flow (``sto_signals``, ``sto_Lambda``)."""
+    setup = _setup(cfg, kubo, cfg.n_flows, cfg.n_swimmers)
+    actors = [_policy(cfg, kubo), "naive", "sto"]
+
+    def compute() -> dict[str, np.ndarray]:
+        a = record_strategies(setup, actors, f"Ku={kubo:g}")
+        disp = a["position"] - a["position"][..., :1, :]  # (F, K, S, N+1, 2)
+        per = np.swapaxes(disp, 0, 1)  # (K, F, S, N+1, 2)
+        k, f, s = per.shape[:3]
+        nt = min(cfg.n_traj, s)
+        return {"final": per[..., -1, :].reshape(k, f * s, 2),
+                "R_hat": np.swapaxes(a["R_hat"], 0, 1).reshape(k, f * s),
+                "traj": per[:, 0, :nt], "time": a["time"],
+                "signals": a["signals"][:, 0].reshape(f * s, *a["signals"].shape[3:]),
+                "Lambda": a["Lambda"][:, 0].reshape(f * s, -1),
+                "sto_signals": a["signals"][:, 2, :nt].reshape(-1, *a["signals"].shape[3:]),
+                "sto_Lambda": a["Lambda"][:, 2, :nt].reshape(f * nt, -1)}
+
+    return cached(cfg, f"ku_{ku_name(kubo)}", _inputs(cfg, setup, actors), compute)
+
+
+def flow_vorticity(setup: EvalSetup) -> np.ndarray:
+    """``omega tau_K`` on the grid, ``(n, n)`` (``[y, x]``), of flow 0 of ``setup`` at
+    ``t = 0``: the realisation its evaluation starts in (same seed, same draws)."""
+    n_c = min(setup.sizes.flows_per_batch, setup.sizes.n_flows)
+    env = SwimmerEnv.build(setup.flow, setup.params, setup.runtime, n_c, 1,
+                           chunk_seed(setup.seed, 0))
+    env.reset()
+    return (env.flow.grid_fields()[0, ..., 4] * env.tau_k).cpu().double().numpy()
+
+
+def _titles(cfg: FiguresConfig, flows: int, swimmers: int, params: EnvParams) -> str:
+    return f"{flows} flow(s) x {swimmers} swimmers, T = {params.duration:g} $\\tau_K$"
+
+
+def _plt():
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    return plt
+
+
+def _save(fig, path: Path) -> None:
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fig.savefig(path, dpi=110)
+    _plt().close(fig)
+
+
+# -- Fig. 1(a): swimmer ----------------------------------------------------------------------
+def fig_swimmer(vorticity: np.ndarray, box: float, traj: dict[str, np.ndarray], path: Path,
+                title: str = "") -> dict:
+    """Trajectories ``{label: (N+1, 2)}`` (absolute, unwrapped) over the periodic vorticity
+    field (tiled as far as they go); returns the extent drawn and the path lengths."""
+    plt = _plt()
+    pts = np.concatenate(list(traj.values()))
+    lo, hi = np.floor(pts.min(0) / box) * box, np.ceil(pts.max(0) / box) * box
+    reps = np.maximum(((hi - lo) / box).round().astype(int), 1)
+    field = np.tile(vorticity, (reps[1], reps[0]))
+    extent = [lo[0], lo[0] + reps[0] * box, lo[1], lo[1] + reps[1] * box]
+    fig, ax = plt.subplots(figsize=(5.5, 5))
+    vmax = np.abs(vorticity).max()
+    im = ax.imshow(field, origin="lower", extent=extent, cmap="RdBu_r", vmin=-vmax, vmax=vmax)
+    fig.colorbar(im, ax=ax, shrink=0.8, label=r"vorticity $\omega\tau_K$")
+    colors = ["tab:orange", "tab:purple", "k", "tab:green"]
+    for (label, x), c in zip(traj.items(), colors, strict=False):
+        ax.plot(x[:, 0], x[:, 1], color=c, lw=1.5, label=label)
+    first = next(iter(traj.values()))[0]
+    ax.plot(*first, "r*", ms=12, label="start")
+    pad = 0.05 * (pts.max(0) - pts.min(0)).max() + 0.5
+    ax.set_xlim(pts[:, 0].min() - pad, pts[:, 0].max() + pad)
+    ax.set_ylim(pts[:, 1].min() - pad, pts[:, 1].max() + pad)
+    ax.set_aspect("equal")
+    ax.set_xlabel(r"$x/\ell_f$")
+    ax.set_ylabel(r"$y/\ell_f$")
+    ax.set_title(title, fontsize=8)
+    ax.legend(fontsize=8, loc="upper left")
+    _save(fig, path)
+    return {"extent": extent,
+            "path_length": {k: float(np.linalg.norm(np.diff(x, axis=0), axis=1).sum())
+                            for k, x in traj.items()}}
+
+
+def build_swimmer(cfg: FiguresConfig) -> dict:
+    """Lambda = +0.98 and -0.98 from one point in a frozen flow (Ku = 1e7), 20 tau_K."""
+    setup = replace(_setup(cfg, 1e7, 1, 1, duration=20.0), sizes=EvalSizes(1, 1, 1, False, 1))
+    actors = ["naive(0.98)", "naive(-0.98)"]
+
+    def compute() -> dict[str, np.ndarray]:
+        # one evaluation each on the same seed: same flow, same initial point (CRN)
+        pos = [record_strategies(setup, [a], a)["position"][0, 0, 0] for a in actors]
+        return {"position": np.stack(pos), "vorticity": flow_vorticity(setup),
+                "box": np.asarray(setup.flow.n_grid * setup.flow.spacing)}
+
+    d = cached(cfg, "swimmer", _inputs(cfg, setup, actors), compute)
+    traj = {r"$\Lambda=+0.98$ (prolate)": d["position"][0],
+            r"$\Lambda=-0.98$ (oblate)": d["position"][1]}
+    return fig_swimmer(d["vorticity"], float(d["box"]), traj, cfg.out / "swimmer.png",
+                       "frozen flow (Ku = $10^7$), T = 20 $\\tau_K$, same start and flow")
+
+
+# -- Fig. smartPerformance -------------------------------------------------------------------
+def fig_smart_performance(summaries: list[dict], finals: dict[float, np.ndarray], path: Path,
+                          title: str = "") -> dict:
+    """(a) R_hat vs Ku from ``swimrl-compare`` summaries (error bars: std over flows);
+    (b-e) final displacements ``finals[Ku]`` ``(3, S, 2)`` (smart, naive, STO)."""
+    plt = _plt()
+    fig = plt.figure(figsize=(13, 3.8))
+    gs = fig.add_gridspec(1, 1 + len(finals), width_ratios=[1.3] + [1] * len(finals))
+    ax = fig.add_subplot(gs[0])
+    ku = np.asarray([s["kubo"] for s in summaries])
+    out: dict = {"kubo": ku.tolist()}
+    for key, name in (("naive", "naive"), ("sto", "STO")):
+        y = [s[key]["R_hat_mean"] for s in summaries]
+        ax.errorbar(ku, y, yerr=[s[key]["R_hat_std"] for s in summaries], color=COLORS[name],
+                    marker="o", capsize=3,
+                    label=name if name == "STO" else r"naive ($\Lambda=0.98$)")
+        out[name] = y
+    smart = [s["smart_mean"] for s in summaries]
+    smart_std = [np.mean([x["R_hat_std"] for x in s["seeds"]]) for s in summaries]
+    ax.errorbar(ku, smart, yerr=smart_std, color=COLORS["smart"], marker="o", capsize=3,
+                label="smart (mean of seeds)")
+    out["smart"] = smart
+    ax.set_xscale("log")
+    ax.set_xlabel("Ku")
+    ax.set_ylabel(r"$\hat R$")
+    n = summaries[0]
+    ax.set_title(f"(a) {n['n_flows']} flows x {n['n_swimmers']}; bars: std over flows",
+                 fontsize=8)
+    ax.legend(fontsize=7)
+    out["spread"] = {}
+    for i, (kubo, final) in enumerate(sorted(finals.items())):
+        a = fig.add_subplot(gs[i + 1])
+        for j, name in enumerate(STRATEGIES):
+            a.scatter(final[j, :, 0], final[j, :, 1], s=2, color=COLORS[name], alpha=0.5,
+                      label=name, rasterized=True)
+        a.plot(0, 0, "r*", ms=10)
+        a.set_aspect("equal")
+        a.set_title(f"({'bcde'[i] if i < 4 else '?'}) Ku = {kubo:g}", fontsize=9)
+        a.set_xlabel(r"$\Delta x/\ell_f$")
+        if i == 0:
+            a.set_ylabel(r"$\Delta y/\ell_f$")
+            a.legend(fontsize=7, markerscale=4, loc="lower right")
+        out["spread"][kubo] = np.linalg.norm(final, axis=-1).mean(axis=1).tolist()
+    fig.suptitle(title, fontsize=8)
+    fig.tight_layout()
+    _save(fig, path)
+    return out
+
+
+def build_smart_performance(cfg: FiguresConfig) -> dict:
+    summaries = [summarise(r) for r in load([cfg.results])]
+    finals = {k: ku_record(cfg, k)["final"] for k in KUS}
+    return fig_smart_performance(
+        summaries, finals, cfg.out / "smartPerformance.png",
+        f"(b-e): final positions, {_titles(cfg, cfg.n_flows, cfg.n_swimmers, cfg.params)} "
+        "per strategy, shipped policies")
+
+
+# -- Fig. ku0.1 ------------------------------------------------------------------------------
+def fig_ku01(traj: np.ndarray, smart_sig: np.ndarray, smart_lam: np.ndarray,
+             sto_sig: np.ndarray, sto_lam: np.ndarray, path: Path, title: str = "") -> dict:
+    """(a) trajectories ``traj`` ``(3, n, N+1, 2)`` from the origin; (b) Lambda against
+    ``n_theta S_np`` for smart and STO; inset: smart's ``<Lambda | n_theta, S_np>``."""
+    plt = _plt()
+    fig, (a, b) = plt.subplots(1, 2, figsize=(11, 4.6))
+    for j, name in enumerate(STRATEGIES):
+        for i, x in enumerate(traj[j]):
+            a.plot(x[:, 0], x[:, 1], color=COLORS[name], lw=0.8, label=name if i == 0 else None)
+    a.plot(0, 0, "r*", ms=10)
+    a.set_aspect("equal")
+    a.set_xlabel(r"$\Delta x/\ell_f$")
+    a.set_ylabel(r"$\Delta y/\ell_f$")
+    a.set_title("(a) trajectories from the start point, Ku = 0.1", fontsize=9)
+    a.legend(fontsize=8)
+    rng = np.random.default_rng(0)
+    out = {}
+    for name, sig, lam in (("smart", smart_sig, smart_lam), ("STO", sto_sig, sto_lam)):
+        x = (sig[..., SIGNAL["n_theta"]] * sig[..., SIGNAL["S_np"]]).ravel()
+        y = lam.ravel()
+        pick = rng.choice(x.size, min(x.size, 20000), replace=False)
+        b.scatter(x[pick], y[pick], s=1, color=COLORS[name], alpha=0.3, label=name,
+                  rasterized=True)
+        out[f"corr_{name}"] = float(np.corrcoef(x, y)[0, 1]) if x.std() > 0 else float("nan")
+    b.set_xlabel(r"$n_\theta S_{np}\tau_K$")
+    b.set_ylabel(r"$\Lambda$")
+    b.set_title("(b) shape factor against $n_\\theta S_{np}$", fontsize=9)
+    b.legend(fontsize=8, markerscale=8, loc="lower left")
+    ins = b.inset_axes([0.62, 0.08, 0.35, 0.35])
+    mean, edges, _ = binned_mean(smart_lam, [smart_sig[..., 1], smart_sig[..., 3]], bins=24,
+                                 ranges=[(-1, 1), _sym(smart_sig[..., 3])], min_count=5)
+    im = ins.pcolormesh(edges[0], edges[1], mean.T, cmap="coolwarm", vmin=-1, vmax=1)
+    ins.set_xlabel(r"$n_\theta$", fontsize=7, labelpad=0)
+    ins.set_ylabel(r"$S_{np}\tau_K$", fontsize=7, labelpad=0)
+    ins.tick_params(labelsize=6)
+    fig.colorbar(im, ax=b, shrink=0.8, label=r"$\langle\Lambda\rangle$ (inset, smart)")
+    fig.suptitle(title, fontsize=8)
+    fig.tight_layout()
+    _save(fig, path)
+    out["inset"] = mean
+    return out
+
+
+def _sym(x: np.ndarray, q: float = 0.995) -> tuple[float, float]:
+    """Symmetric range covering the central ``q`` of ``|x|``."""
+    m = float(np.quantile(np.abs(x), q)) or 1.0
+    return (-m, m)
+
+
+def build_ku01(cfg: FiguresConfig) -> dict:
+    d = ku_record(cfg, 0.1)
+    return fig_ku01(d["traj"], d["signals"], d["Lambda"], d["sto_signals"], d["sto_Lambda"],
+                    cfg.out / "ku0.1.png",
+                    f"Ku = 0.1, shipped policy ku0.1; "
+                    f"{_titles(cfg, cfg.n_flows, cfg.n_swimmers, cfg.params)}")
+
+
+# -- Fig. kuInf and the S_nn statistic -------------------------------------------------------
+def fig_ku_inf(sig: np.ndarray, lam: np.ndarray, path: Path, title: str = "") -> dict:
+    """(a) Lambda over (n_r, S_np, omega) (a subsample); (b, c) ``<Lambda | S_np, omega>``
+    for ``n_r >= 0.8`` and ``n_r <= -0.8``; the S_nn statistic in the title."""
+    plt = _plt()
+    s, lam = sig.reshape(-1, 5), lam.ravel()
+    fig = plt.figure(figsize=(14, 4.3))
+    ax = fig.add_subplot(1, 3, 1, projection="3d")
+    pick = np.random.default_rng(0).choice(lam.size, min(lam.size, 8000), replace=False)
+    sc = ax.scatter(s[pick, 0], s[pick, 3], s[pick, 4], c=lam[pick], cmap="coolwarm", vmin=-1,
+                    vmax=1, s=2)
+    ax.set_xlabel(r"$n_r$")
+    ax.set_ylabel(r"$S_{np}\tau_K$")
+    ax.set_zlabel(r"$\omega\tau_K$")
+    ax.set_title("(a)", fontsize=9)
+    fig.colorbar(sc, ax=ax, shrink=0.6, label=r"$\Lambda$", pad=0.1)
+    ranges = [_sym(s[:, 3]), _sym(s[:, 4])]
+    out = {"snn": snn_extremes(s[:, 2], lam)}
+    for i, (label, mask) in enumerate(((r"$n_r \geq 0.8$", s[:, 0] >= 0.8),
+                                       (r"$n_r \leq -0.8$", s[:, 0] <= -0.8))):
+        a = fig.add_subplot(1, 3, 2 + i)
+        mean, edges, _ = binned_mean(lam[mask], [s[mask, 3], s[mask, 4]], bins=30,
+                                     ranges=ranges, min_count=5)
+        im = a.pcolormesh(edges[0], edges[1], mean.T, cmap="coolwarm", vmin=-1, vmax=1)
+        fig.colorbar(im, ax=a, label=r"$\langle\Lambda\rangle$")
+        a.set_xlabel(r"$S_{np}\tau_K$")
+        a.set_ylabel(r"$\omega\tau_K$")
+        a.set_title(f"({'bc'[i]}) {label}, {int(mask.sum())} decisions", fontsize=9)
+        out["bc"[i]] = mean
+    st = out["snn"]
+    fig.suptitle(f"{title}\nS_nn statistic: P(Λ>0 | lowest 1% of S_nn) = "
+                 f"{100 * st['p_pos_given_low']:.0f}%, P(Λ<0 | highest 1%) = "
+                 f"{100 * st['p_neg_given_high']:.0f}% (paper: 82%)", fontsize=8)
+    fig.tight_layout()
+    _save(fig, path)
+    return out
+
+
+def build_ku_inf(cfg: FiguresConfig) -> dict:
+    d = ku_record(cfg, 1e7)
+    return fig_ku_inf(d["signals"], d["Lambda"], cfg.out / "kuInf.png",
+                      f"smart, Ku = $10^7$, shipped policy ku1e7; "
+                      f"{_titles(cfg, cfg.n_flows, cfg.n_swimmers, cfg.params)}")
+
+
+# -- Fig. ku_pattern -------------------------------------------------------------------------
+def fig_ku_pattern(records: dict[float, tuple[np.ndarray, np.ndarray]], path: Path,
+                   title: str = "") -> dict:
+    """``<Lambda | S_np, n_theta>`` (top) and ``<Lambda | S_np, omega>`` (bottom) per Ku."""
+    plt = _plt()
+    kus = sorted(records)
+    fig, axes = plt.subplots(2, len(kus), figsize=(3.3 * len(kus), 6), squeeze=False)
+    out = {}
+    for i, kubo in enumerate(kus):
+        sig, lam = records[kubo]
+        s = sig.reshape(-1, 5)
+        for row, (other, rng) in enumerate((("n_theta", (-1, 1)), ("omega", _sym(s[:, 4])))):
+            a = axes[row, i]
+            mean, edges, _ = binned_mean(lam, [s[:, 3], s[:, SIGNAL[other]]], bins=30,
+                                         ranges=[_sym(s[:, 3]), rng], min_count=5)
+            im = a.pcolormesh(edges[0], edges[1], mean.T, cmap="coolwarm", vmin=-1, vmax=1)
+            a.set_xlabel(LABEL["S_np"])
+            a.set_ylabel(LABEL[other])
+            a.set_title(f"({'abcdefgh'[row * 4 + i] if len(kus) == 4 else ''}) "
+                        f"Ku = {kubo:g}", fontsize=9)
+            out[(kubo, other)] = mean
+    fig.colorbar(im, ax=axes, shrink=0.6, label=r"$\langle\Lambda\rangle$")
+    fig.suptitle(title, fontsize=8)
+    _save(fig, path)
+    return out
+
+
+def build_ku_pattern(cfg: FiguresConfig) -> dict:
+    recs = {}
+    for k in KUS:
+        d = ku_record(cfg, k)
+        recs[k] = (d["signals"], d["Lambda"])
+    return fig_ku_pattern(recs, cfg.out / "ku_pattern.png",
+                          f"smart (shipped policies); "
+                          f"{_titles(cfg, cfg.n_flows, cfg.n_swimmers, cfg.params)}")
+
+
+# -- Fig. trainingCurves ---------------------------------------------------------------------
+def find_curves(root: Path) -> dict[str, Path]:
+    """``curves.csv`` files under ``root``, labelled by their run directory."""
+    return {p.parent.name: p for p in sorted(Path(root).rglob("curves.csv"))}
+
+
+def fig_training_curves(curves: dict[str, dict[str, np.ndarray]], path: Path,
+                        title: str = "") -> dict:
+    """Held-out ``eval/R_hat`` against frames, one panel per Ku (label prefix ``ku*_``)."""
+    plt = _plt()
+    groups: dict[str, list[str]] = {}
+    for label in curves:
+        groups.setdefault(label.split("_")[0], []).append(label)
+    fig, axes = plt.subplots(1, max(1, len(groups)), figsize=(3.6 * max(1, len(groups)), 3.4),
+                             squeeze=False)
+    out = {}
+    for a, (ku, labels) in zip(axes[0], sorted(groups.items()), strict=False):
+        for label in labels:
+            c = curves[label]
+            ok = np.isfinite(c["eval/R_hat"])
+            a.plot(c["frames"][ok] / 1e6, c["eval/R_hat"][ok], marker="o", ms=2, label=label)
+            out[label] = float(c["eval/R_hat"][ok][-1])
+        a.set_xlabel("training frames (millions of decisions)")
+        a.set_ylabel(r"held-out $\hat R$")
+        a.set_title(ku, fontsize=9)
+        a.legend(fontsize=7)
+    fig.suptitle(title, fontsize=8)
+    fig.tight_layout()
+    _save(fig, path)
+    return out
+
+
+def build_training_curves(cfg: FiguresConfig) -> dict:
+    files = find_curves(cfg.curves)
+    if not files:
+        return {"pending": f"no curves.csv under {cfg.curves}"}
+    return fig_training_curves({k: read_curves(p) for k, p in files.items()},
+                               cfg.out / "trainingCurves.png", f"curves.csv under {cfg.curves}")
+
+
+# -- robustness ------------------------------------------------------------------------------
+def fig_sweep(x: np.ndarray, r: dict[str, np.ndarray], err: dict[str, np.ndarray], xlabel: str,
+              path: Path, title: str = "", ratio: bool = False, logx: bool = True,
+              reference: tuple[np.ndarray, np.ndarray] | None = None) -> dict:
+    """R_hat of the strategies against a swept parameter (error bars: std over flows), and
+    with ``ratio`` a second panel smart / STO."""
+    plt = _plt()
+    fig, axes = plt.subplots(1, 2 if ratio else 1, figsize=(9 if ratio else 4.8, 3.6),
+                             squeeze=False)
+    a = axes[0, 0]
+    for name in STRATEGIES:
+        a.errorbar(x, r[name], yerr=err[name], color=COLORS[name], marker="o", capsize=3,
+                   label=name)
+    if reference is not None:
+        a.plot(*reference, "k:", lw=1, label=r"$\propto T^{-1/2}$")
+    a.set_xlabel(xlabel)
+    a.set_ylabel(r"$\hat R$")
+    a.legend(fontsize=8)
+    out = {"x": np.asarray(x).tolist(), **{k: np.asarray(v).tolist() for k, v in r.items()}}
+    if ratio:
+        b = axes[0, 1]
+        q = np.asarray(r["smart"]) / np.asarray(r["STO"])
+        b.plot(x, q, color=COLORS["smart"], marker="o")
+        b.axhline(1, color=COLORS["STO"], ls="--", lw=1)
+        b.set_xlabel(xlabel)
+        b.set_ylabel(r"$\hat R_{\rm smart}/\hat R_{\rm STO}$")
+        out["ratio"] = q.tolist()
+    for ax in axes[0]:
+        if logx:
+            ax.set_xscale("log")
+    fig.suptitle(title, fontsize=8)
+    fig.tight_layout()
+    _save(fig, path)
+    return out
+
+
+def sweep_record(cfg: FiguresConfig, name: str, values: list[float], key: str,
+                 kubo: float = 10.0) -> dict[str, np.ndarray]:
+    """Per-flow R_hat ``(len(values), 3, F)`` of smart (trained at the paper's values), naive
+    and STO with ``EnvParams.<key>`` set to each value (cached)."""
+    out = []
+    for v in values:
+        setup = _setup(cfg, kubo, cfg.robust_flows, cfg.robust_swimmers, **{key: v})
+        actors = [_policy(cfg, kubo), "naive", "sto"]
+        per = cached(cfg, f"{name}_{key}{v:g}", _inputs(cfg, setup, actors),
+                     lambda s=setup, a=actors: {"per_flow": np.asarray(
+                         [m["per_flow"] for m in _shared(s, a)])})
+        out.append(per["per_flow"])
+    return {"per_flow": np.stack(out)}
+
+
+def _shared(setup: EvalSetup, actors: list[str]) -> list[dict]:
+    setup = replace(setup, sizes=replace(setup.sizes, record=0))
+    return evaluate_shared(setup, [_actor(a, setup.params) for a in actors],
+                           desc="robustness")
+
+
+def _stats(per: np.ndarray) -> tuple[dict, dict]:
+    mean = {n: per[:, j].mean(-1) for j, n in enumerate(STRATEGIES)}
+    std = {n: per[:, j].std(-1, ddof=1) if per.shape[-1] > 1 else 0 * per[:, j, 0]
+           for j, n in enumerate(STRATEGIES)}
+    return mean, std
+
+
+def build_robustness_noise(cfg: FiguresConfig) -> dict:
+    d_r = [1e-4, 1e-3, 1e-2, 1e-1]
+    per = sweep_record(cfg, "noise", d_r, "rot_diffusion")["per_flow"]
+    mean, std = _stats(per)
+    return fig_sweep(np.asarray(d_r), mean, std, r"$D_r\tau_K$",
+                     cfg.out / "robustness-noise.png",
+                     f"Ku = 10, smart trained at $D_r = 0$; "
+                     f"{_titles(cfg, cfg.robust_flows, cfg.robust_swimmers, cfg.params)}; "
+                     "bars: std over flows", ratio=True)
+
+
+def build_robustness(cfg: FiguresConfig) -> dict:
+    sweeps = (("duration", [50.0, 100.0, 200.0, 400.0], r"$T/\tau_K$"),
+              ("update_interval", [0.05, 0.1, 0.2, 0.5], r"$T_u/\tau_K$"),
+              ("swim_speed", [0.354, 0.707, 1.414], r"$v_s/u_{\rm rms}$"))
+    out = {}
+    for key, values, label in sweeps:
+        per = sweep_record(cfg, "robust", values, key)["per_flow"]
+        mean, std = _stats(per)
+        x = np.asarray(values)
+        ref = None
+        if key == "duration":
+            ref = (x, mean["naive"][2] * np.sqrt(200.0 / x))
+        out[key] = fig_sweep(x, mean, std, label, cfg.out / f"robustness_{key}.png",
+                             f"Ku = 10, smart trained at the paper's values; "
+                             f"{cfg.robust_flows} flows x {cfg.robust_swimmers}; "
+                             "bars: std over flows", reference=ref)
+    return out
+
+
+#: Figure name -> builder, in build order.
+BUILDERS: dict[str, Callable[[FiguresConfig], dict]] = {
+    "swimmer": build_swimmer,
+    "smartPerformance": build_smart_performance,
+    "ku0.1": build_ku01,
+    "kuInf": build_ku_inf,
+    "ku_pattern": build_ku_pattern,
+    "trainingCurves": build_training_curves,
+    "robustness-noise": build_robustness_noise,
+    "robustness": build_robustness,
+}
+
+
+def build_figures(cfg: FiguresConfig, log: Callable[[str], None] = print) -> dict[str, dict]:
+    """Every figure (or ``cfg.only``); returns each builder's data and wall time."""
+    names = [cfg.only] if cfg.only else list(BUILDERS)
+    out = {}
+    for name in names:
+        t0 = time.perf_counter()
+        out[name] = BUILDERS[name](cfg)
+        wall = time.perf_counter() - t0
+        out[name]["wall_s"] = wall
+        log(f"{name}: {wall:.0f} s" + (f" ({out[name]['pending']})" if "pending" in out[name]
+                                       else ""))
+    return out

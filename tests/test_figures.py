@@ -1,0 +1,99 @@
+"""Figures (swimrl.analysis.figures): policy-map binning, the S_nn statistic, each figure on a
+tiny record, and the cached evaluation records."""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from swimrl.analysis import figures
+from swimrl.analysis.performance import load, summarise
+from swimrl.analysis.policy_maps import binned_mean, snn_extremes
+from swimrl.env import EnvParams
+from swimrl.flows.build import StochasticSpec
+from swimrl.runtime import Runtime
+
+RESULTS = Path(__file__).parent.parent / "docs" / "results" / "smart_ku_sweep"
+RNG = np.random.default_rng(1)
+
+
+def _record(n: int = 100, n_dec: int = 100):
+    """A synthetic smart record: signals uniform, Lambda = tanh(3 n_theta S_np)."""
+    sig = RNG.uniform(-1, 1, (n, n_dec, 5))
+    return sig, np.tanh(3 * sig[..., 1] * sig[..., 3])
+
+
+def test_binned_mean_recovers_a_known_policy():
+    s1, s2 = RNG.uniform(-1, 1, (2, 200_000))
+    lam = 0.5 * s1 - 0.3 * s2  # linear: the bin mean is the value at the bin centre
+    mean, edges, counts = binned_mean(lam, [s1, s2], bins=10, ranges=[(-1, 1), (-1, 1)])
+    c1, c2 = [(e[1:] + e[:-1]) / 2 for e in edges]
+    truth = 0.5 * c1[:, None] - 0.3 * c2[None, :]
+    assert mean.shape == (10, 10) and counts.sum() == 200_000
+    assert np.abs(mean - truth).max() < 0.01
+    m1, e1, _ = binned_mean(np.sign(s1), [s1], bins=4, ranges=[(-1, 1)])
+    assert m1 == pytest.approx([-1, -1, 1, 1]) and len(e1) == 1
+    sparse, _, _ = binned_mean(lam[:50], [s1[:50], s2[:50]], bins=20, min_count=3)
+    assert np.isnan(sparse).any()
+
+
+def test_snn_statistic_on_a_synthetic_record():
+    snn = RNG.permutation(10_000).astype(float)
+    lam = np.where(RNG.random(10_000) < 0.5, 0.5, -0.5)
+    low = np.flatnonzero(snn < 100)
+    lam[low[:82]], lam[low[82:]] = 0.9, -0.9  # 82 % of the lowest 1 % positive
+    high = np.flatnonzero(snn >= 9900)
+    lam[high] = -0.9
+    st = snn_extremes(snn, lam, 0.01)
+    assert st["n_low"] == 100 and st["p_pos_given_low"] == pytest.approx(0.82)
+    assert st["p_neg_given_high"] == 1.0
+
+
+def test_figure_functions_on_tiny_records(tmp_path):
+    sig, lam = _record()
+    n_dec = sig.shape[1]
+    traj = np.cumsum(RNG.normal(0, 0.1, (3, 2, n_dec + 1, 2)), axis=2)
+    out = figures.fig_ku01(traj, sig, lam, sig[:2], np.sign(sig[:2, :, 1]), tmp_path / "a.png")
+    assert out["corr_smart"] > 0.8 and (tmp_path / "a.png").stat().st_size > 0
+    ku_inf = figures.fig_ku_inf(sig, lam, tmp_path / "b.png")
+    assert ku_inf["snn"]["n"] == lam.size and ku_inf["b"].shape == (30, 30)
+    pattern = figures.fig_ku_pattern({0.1: (sig, lam), 10.0: (sig, -lam)}, tmp_path / "c.png")
+    top = pattern[(0.1, "n_theta")]
+    assert np.nanmean(top[-5:, -5:]) > 0.5 and np.nanmean(top[:5, -5:]) < -0.5  # S_np x n_theta
+    vort = RNG.normal(size=(8, 8))
+    two = {"a": traj[0, 0] + 1, "b": traj[1, 0] + 1}
+    sw = figures.fig_swimmer(vort, 2.0, two, tmp_path / "d.png")
+    assert sw["path_length"]["a"] > 0 and sw["extent"][1] - sw["extent"][0] >= 2.0
+    summaries = [summarise(r) for r in load([RESULTS])]
+    finals = {k: traj[:, :, -1] for k in (0.1, 1.0)}
+    perf = figures.fig_smart_performance(summaries, finals, tmp_path / "e.png")
+    assert perf["kubo"] == [0.1, 1.0, 10.0, 1e7] and perf["STO"][0] > perf["naive"][0]
+    assert perf["spread"][1.0] == pytest.approx(np.linalg.norm(finals[1.0], axis=-1).mean(1))
+    frames = np.arange(5.0) * 1e6
+    curves = {"ku10_seed0": {"frames": frames, "eval/R_hat": np.r_[0.3, np.nan, 0.5, 0.6, 0.62]}}
+    assert figures.fig_training_curves(curves, tmp_path / "f.png") == {"ku10_seed0": 0.62}
+    r = {"smart": np.array([1.2, 1.0]), "naive": np.array([0.5, 0.5]), "STO": np.array([1, 1.0])}
+    sweep = figures.fig_sweep(np.array([1e-3, 1e-2]), r, {k: 0 * v for k, v in r.items()}, "x",
+                        tmp_path / "g.png", ratio=True)
+    assert sweep["ratio"] == pytest.approx([1.2, 1.0])
+
+
+def test_ku_record_is_cached_and_consistent(tmp_path):
+    cfg = figures.FiguresConfig(
+        out=tmp_path / "fig", cache=tmp_path / "cache", runtime=Runtime.from_names("cpu",
+                                                                                  "float32", 1),
+        params=EnvParams(duration=1.0), flow=StochasticSpec(kubo=10.0, n_grid=64, spacing=0.1),
+        n_flows=2, n_swimmers=3, n_traj=2, progress=False)
+    a = figures.ku_record(cfg, 10.0)
+    assert a["final"].shape == (3, 6, 2) and a["traj"].shape == (3, 2, 11, 2)
+    assert a["signals"].shape == (6, 10, 5) and a["sto_Lambda"].shape == (4, 10)
+    assert np.allclose(a["traj"][:, :, -1], a["final"][:, :2], atol=1e-5)
+    ref = 0.707 * 1.0 * 0.5  # v_s T in flow units (tau_K = 0.5 l_f / u_rms)
+    assert np.linalg.norm(a["final"], axis=-1) / ref == pytest.approx(a["R_hat"], rel=1e-3)
+    assert len(list((tmp_path / "cache").glob("ku_ku10-*.npz"))) == 1
+    b = figures.ku_record(cfg, 10.0)
+    assert all(np.array_equal(a[k], b[k]) for k in a)
+    assert math.isclose(float(a["time"][-1]), 1.0)
