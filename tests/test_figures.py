@@ -97,3 +97,18 @@ def test_ku_record_is_cached_and_consistent(tmp_path):
     b = figures.ku_record(cfg, 10.0)
     assert all(np.array_equal(a[k], b[k]) for k in a)
     assert math.isclose(float(a["time"][-1]), 1.0)
+
+
+def test_videos_on_a_tiny_record(tmp_path):
+    from swimrl.analysis.videos import video_cloud, video_trajectories
+
+    steps = RNG.normal(0, 0.2, (3, 4, 3, 2))
+    rec = {"cloud": np.cumsum(steps, axis=2), "traj_abs": 5 + np.cumsum(steps, axis=2),
+           "vorticity": RNG.normal(size=(3, 8, 8)), "box": np.asarray(4.0),
+           "time": np.arange(21) * 0.1}
+    cloud = video_cloud(rec, 10.0, tmp_path / "c.mp4", fps=2)
+    assert cloud["frames"] == 3 and (tmp_path / "c.mp4").stat().st_size > 1000
+    assert cloud["mean_distance"] == pytest.approx(np.linalg.norm(rec["cloud"][:, :, -1],
+                                                                  axis=-1).mean(1))
+    traj = video_trajectories(rec, 10.0, tmp_path / "t.mp4", fps=2)
+    assert traj["frames"] == 3 and traj["extent"][0] <= rec["traj_abs"][..., 0].min()

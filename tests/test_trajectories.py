@@ -58,3 +58,17 @@ def test_record_blocks_and_subset(compose_cfg):
 def test_record_bound(compose_cfg):
     with pytest.raises(ConfigError, match="eval.record=5"):
         eval_config(compose_cfg(SMALL + SIZE + ["eval.record=5"]))
+
+
+def test_record_vorticity_frames(compose_cfg):
+    """field_every=m: omega tau_K of the first flow at decisions 0, m, ... and at T; the first
+    frame is the evaluation's initial flow."""
+    from swimrl.analysis.figures import flow_vorticity
+
+    c = eval_config(compose_cfg(SMALL + SIZE))
+    rec = TrajectoryRecorder(1, field_every=4, field_stride=2)
+    evaluate(c.setup, c.strategy, "sto", rec)
+    a = rec.arrays()
+    assert a["vorticity"].shape == (4, 32, 32)  # decisions 0, 4, 8 and T (N = 10)
+    assert a["field_time"] == pytest.approx([0.0, 0.4, 0.8, 1.0])
+    np.testing.assert_allclose(a["vorticity"][0], flow_vorticity(c.setup)[::2, ::2], atol=1e-4)

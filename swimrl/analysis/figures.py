@@ -37,6 +37,8 @@ from .training_curves import read_curves
 #: Bump when a cached array's meaning changes.
 CACHE_VERSION = 1
 KUS = (0.1, 1.0, 10.0, 1e7)
+#: Decisions between video frames (4 tau_K at T_u = 0.1 tau_K: 51 frames over T = 200 tau_K).
+FRAME_EVERY = 40
 STRATEGIES = ("smart", "naive", "STO")
 COLORS = {"smart": "tab:orange", "naive": "k", "STO": "tab:green"}
 SIGNAL = {"n_r": 0, "n_theta": 1, "S_nn": 2, "S_np": 3, "omega": 4}
@@ -54,20 +56,33 @@ class FiguresConfig:
     """``swimrl-figures``: where, which, and how large (defaults in ``conf/figures.yaml``)."""
 
     out: Path
+    """Directory of the PNGs (``docs/figures``)."""
     cache: Path
+    """Directory of the cached evaluation records."""
     runtime: Runtime
     params: EnvParams
+    """Swimmer and episode of every evaluation (the robustness sweeps change one field)."""
     flow: StochasticSpec
+    """Flow of every evaluation; ``kubo`` is set per figure."""
     only: str | None = None
+    """One figure (a key of :data:`BUILDERS`), or None: all."""
     n_flows: int = 1
+    """Flows of each Ku record (final positions, trajectories, policy maps)."""
     n_swimmers: int = 1000
+    """Swimmers per flow and strategy of each Ku record."""
     n_traj: int = 8
+    """Trajectories drawn per strategy."""
     robust_flows: int = 2
+    """Flows per point of the robustness sweeps."""
     robust_swimmers: int = 100
+    """Swimmers per flow and strategy per point of the robustness sweeps."""
     seed: int = 0
     policies: str = "pretrained"
+    """Smart policy at Ku: ``<policies>/ku0.1`` ... ``<policies>/ku1e7`` (a policy spec)."""
     results: Path = Path("docs/results/smart_ku_sweep")
+    """``comparison.json`` records of smartPerformance(a)."""
     curves: Path = Path("docs/results")
+    """Searched for ``curves.csv`` (trainingCurves)."""
     progress: bool = True
 
 
@@ -121,10 +136,11 @@ def _actor(name: str, params: EnvParams):
     return load_policy(name, params)
 
 
-def record_strategies(setup: EvalSetup, actors: list[str], desc: str) -> dict[str, np.ndarray]:
+def record_strategies(setup: EvalSetup, actors: list[str], desc: str,
+                      field_every: int = 0) -> dict[str, np.ndarray]:
     """Every decision of every swimmer of ``actors`` (policy specs, ``naive``, ``sto``,
     ``naive(L)``) sharing the flows of ``setup``: the recorder's arrays."""
-    rec = TrajectoryRecorder(setup.sizes.n_swimmers)
+    rec = TrajectoryRecorder(setup.sizes.n_swimmers, field_every)
     evaluate_shared(setup, [_actor(a, setup.params) for a in actors], desc=desc, recorder=rec)
     return rec.arrays()
 
@@ -133,12 +149,15 @@ def ku_record(cfg: FiguresConfig, kubo: float) -> dict[str, np.ndarray]:
     """Smart (shipped policy), naive and STO at ``kubo`` on shared flows (cached):
     ``final`` ``(3, F S, 2)`` displacements, ``R_hat`` ``(3, F S)``, ``traj`` ``(3, n_traj,
     N+1, 2)`` displacements, smart's ``signals`` ``(F S, N, 5)`` and ``Lambda``, STO's for
-    the first ``n_traj`` swimmers of each flow (``sto_signals``, ``sto_Lambda``)."""
+    the first ``n_traj`` swimmers of each flow (``sto_signals``, ``sto_Lambda``); for the
+    videos, ``cloud`` ``(3, F S, frames, 2)`` displacements and ``traj_abs`` ``(3, n_traj,
+    frames, 2)`` unwrapped positions in flow 0 every :data:`FRAME_EVERY` decisions, with that
+    flow's ``vorticity`` ``(frames, n/4, n/4)`` and ``box``."""
     setup = _setup(cfg, kubo, cfg.n_flows, cfg.n_swimmers)
     actors = [_policy(cfg, kubo), "naive", "sto"]
 
     def compute() -> dict[str, np.ndarray]:
-        a = record_strategies(setup, actors, f"Ku={kubo:g}")
+        a = record_strategies(setup, actors, f"Ku={kubo:g}", FRAME_EVERY)
         disp = a["position"] - a["position"][..., :1, :]  # (F, K, S, N+1, 2)
         per = np.swapaxes(disp, 0, 1)  # (K, F, S, N+1, 2)
         k, f, s = per.shape[:3]
@@ -149,9 +168,13 @@ def ku_record(cfg: FiguresConfig, kubo: float) -> dict[str, np.ndarray]:
                 "signals": a["signals"][:, 0].reshape(f * s, *a["signals"].shape[3:]),
                 "Lambda": a["Lambda"][:, 0].reshape(f * s, -1),
                 "sto_signals": a["signals"][:, 2, :nt].reshape(-1, *a["signals"].shape[3:]),
-                "sto_Lambda": a["Lambda"][:, 2, :nt].reshape(f * nt, -1)}
+                "sto_Lambda": a["Lambda"][:, 2, :nt].reshape(f * nt, -1),
+                "cloud": per[..., ::FRAME_EVERY, :].reshape(k, f * s, -1, 2),
+                "traj_abs": np.swapaxes(a["position"], 0, 1)[:, 0, :nt, ::FRAME_EVERY],
+                "vorticity": a["vorticity"], "box": a["box"]}
 
-    return cached(cfg, f"ku_{ku_name(kubo)}", _inputs(cfg, setup, actors), compute)
+    inputs = {**_inputs(cfg, setup, actors), "frames": FRAME_EVERY}
+    return cached(cfg, f"ku_{ku_name(kubo)}", inputs, compute)
 
 
 def flow_vorticity(setup: EvalSetup) -> np.ndarray:
@@ -323,7 +346,7 @@ def fig_ku01(traj: np.ndarray, smart_sig: np.ndarray, smart_lam: np.ndarray,
     b.set_ylabel(r"$\Lambda$")
     b.set_title("(b) shape factor against $n_\\theta S_{np}$", fontsize=9)
     b.legend(fontsize=8, markerscale=8, loc="lower left")
-    ins = b.inset_axes([0.62, 0.08, 0.35, 0.35])
+    ins = b.inset_axes([0.63, 0.56, 0.34, 0.34])
     mean, edges, _ = binned_mean(smart_lam, [smart_sig[..., 1], smart_sig[..., 3]], bins=24,
                                  ranges=[(-1, 1), _sym(smart_sig[..., 3])], min_count=5)
     im = ins.pcolormesh(edges[0], edges[1], mean.T, cmap="coolwarm", vmin=-1, vmax=1)
@@ -403,7 +426,8 @@ def fig_ku_pattern(records: dict[float, tuple[np.ndarray, np.ndarray]], path: Pa
     """``<Lambda | S_np, n_theta>`` (top) and ``<Lambda | S_np, omega>`` (bottom) per Ku."""
     plt = _plt()
     kus = sorted(records)
-    fig, axes = plt.subplots(2, len(kus), figsize=(3.3 * len(kus), 6), squeeze=False)
+    fig, axes = plt.subplots(2, len(kus), figsize=(3.3 * len(kus), 6.4), squeeze=False,
+                             layout="constrained")
     out = {}
     for i, kubo in enumerate(kus):
         sig, lam = records[kubo]
@@ -568,6 +592,18 @@ def build_robustness(cfg: FiguresConfig) -> dict:
     return out
 
 
+def build_videos(cfg: FiguresConfig) -> dict:
+    """Supplemental videos 1-4 (trajectories) and 6-9 (clouds) into ``<out>/../videos``."""
+    from .videos import video_cloud, video_trajectories
+
+    out, where = {}, Path(cfg.out).parent / "videos"
+    for i, kubo in enumerate(KUS):
+        rec = ku_record(cfg, kubo)
+        out[i + 1] = video_trajectories(rec, kubo, where / f"video{i + 1}_{ku_name(kubo)}.mp4")
+        out[i + 6] = video_cloud(rec, kubo, where / f"video{i + 6}_{ku_name(kubo)}_cloud.mp4")
+    return out
+
+
 #: Figure name -> builder, in build order.
 BUILDERS: dict[str, Callable[[FiguresConfig], dict]] = {
     "swimmer": build_swimmer,
@@ -578,6 +614,7 @@ BUILDERS: dict[str, Callable[[FiguresConfig], dict]] = {
     "trainingCurves": build_training_curves,
     "robustness-noise": build_robustness_noise,
     "robustness": build_robustness,
+    "videos": build_videos,
 }
 
 

@@ -15,7 +15,10 @@ swimmers and ``N`` decisions; lengths in ``l_f``, times in ``tau_K``, signals as
 * ``signals`` ``(F, K, n, N, 5)``, ``Lambda`` ``(F, K, n, N)`` (the action, clamped to
   ``[-Lambda_max, Lambda_max]`` as the environment applies it);
 * ``position`` ``(F, K, n, N+1, 2)``, ``theta`` ``(F, K, n, N+1)``, ``time`` ``(N+1,)``;
-* ``R_hat`` ``(F, K, n)``, ``reference_distance`` ``v_s T``, ``box`` the period ``L``.
+* ``R_hat`` ``(F, K, n)``, ``reference_distance`` ``v_s T``, ``box`` the period ``L``;
+* with ``field_every = m > 0``: ``vorticity`` ``(frames, n_g, n_g)``, ``omega tau_K`` of the
+  first flow on every ``field_stride``-th grid node (``[y, x]``) at decisions ``0, m, 2m,
+  ...`` and at ``T`` (times ``field_time``).
 """
 
 from __future__ import annotations
@@ -36,8 +39,11 @@ TRAJECTORY_FILE = "trajectories.npz"
 class TrajectoryRecorder:
     """Collects every decision of the first ``n`` swimmers of each flow and strategy block."""
 
-    def __init__(self, n: int):
+    def __init__(self, n: int, field_every: int = 0, field_stride: int = 4):
         self.n = int(n)
+        self.field_every, self.field_stride = int(field_every), int(field_stride)
+        self._fields: list[np.ndarray] = []
+        self._field_time: list[float] = []
         self._chunks: list[dict[str, np.ndarray]] = []
         self._cur: dict[str, list] = {}
         self._env = None
@@ -57,6 +63,15 @@ class TrajectoryRecorder:
                      "update_interval": float(env.params.update_interval),
                      "shape_factor_max": float(env.params.shape_factor_max)}
 
+    def _field(self, i: int) -> None:
+        """Vorticity of the first flow (first chunk only) at decision ``i``."""
+        env, k = self._env, self.field_stride
+        if self._chunks or not self.field_every:
+            return
+        omega = (env.flow.basis[0, ::k, ::k, :, 4] * env.flow.coeffs[0]).sum(-1)
+        self._fields.append((omega * env.tau_k).cpu().float().numpy())
+        self._field_time.append(i * env.params.update_interval)
+
     def _state(self) -> None:
         env, sel = self._env, self._sel
         start = env.start_pos + env.flow.grid.length * env.start_image.to(env.pos.dtype)
@@ -71,10 +86,13 @@ class TrajectoryRecorder:
         self._cur["Lambda"].append(
             td.get("action")[:, self._sel, 0].clamp(-lam_max, lam_max).cpu())
         self._state()
+        if self.field_every and i % self.field_every == 0:
+            self._field(i)
 
     def finish(self, r_hat: torch.Tensor) -> None:
         """End of the chunk's episode: final state and the swimmers' ``R_hat`` ``(F, K S)``."""
         self._state()
+        self._field(self._env.params.n_decisions)
         f = r_hat.shape[0]
         shape = (f, *self._shape)
         out = {k: torch.stack(v, dim=2).numpy() for k, v in self._cur.items()}
@@ -90,6 +108,9 @@ class TrajectoryRecorder:
         out["time"] = np.arange(n_dec + 1) * self.meta["update_interval"]
         for k, v in self.meta.items():
             out[k] = np.asarray(v)
+        if self._fields:
+            out["vorticity"] = np.stack(self._fields)
+            out["field_time"] = np.asarray(self._field_time)
         return out
 
 

@@ -1,0 +1,132 @@
+r"""The paper's supplemental videos (MP4, Matplotlib + the ffmpeg of ``imageio-ffmpeg``).
+
+* :func:`video_trajectories` (videos 1-4): a few swimmers of each strategy over the evolving
+  vorticity of their flow (tiled periodically), inset: their mean distance from the start.
+* :func:`video_cloud` (videos 6-9): the displacements of all recorded swimmers (a dispersion
+  cloud from the origin), inset: the ensemble-mean distance from the start.
+
+Both take the arrays of :func:`swimrl.analysis.figures.ku_record` and return what they drew.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+
+from .figures import COLORS, STRATEGIES
+
+
+def _writer(fps: int):
+    import imageio_ffmpeg
+    import matplotlib
+
+    matplotlib.use("Agg")
+    matplotlib.rcParams["animation.ffmpeg_path"] = imageio_ffmpeg.get_ffmpeg_exe()
+    from matplotlib.animation import FFMpegWriter
+
+    return FFMpegWriter(fps=fps, codec="libx264", bitrate=900,
+                        extra_args=["-pix_fmt", "yuv420p"])
+
+
+def _distance_inset(fig, ax, t: np.ndarray, dist: np.ndarray):
+    """Inset of ``dist`` ``(3, frames)`` against ``t``; returns the moving markers."""
+    ins = ax.inset_axes([0.02, 0.72, 0.28, 0.26])
+    marks = []
+    for j, name in enumerate(STRATEGIES):
+        ins.plot(t, dist[j], color=COLORS[name], lw=1)
+        (m,) = ins.plot(t[:1], dist[j, :1], "o", color=COLORS[name], ms=3)
+        marks.append(m)
+    ins.set_xlabel(r"$t/\tau_K$", fontsize=6, labelpad=0)
+    ins.set_ylabel(r"$|x-x_0|/\ell_f$", fontsize=6, labelpad=0)
+    ins.tick_params(labelsize=5)
+    ins.patch.set_alpha(0.85)
+    return marks
+
+
+def video_trajectories(rec: dict, kubo: float, path: Path, fps: int = 8) -> dict:
+    """Video 1-4 at ``kubo`` from ``rec['traj_abs']`` and ``rec['vorticity']``."""
+    import matplotlib.pyplot as plt
+    from matplotlib.animation import FuncAnimation
+
+    traj, vort, box = rec["traj_abs"], rec["vorticity"], float(rec["box"])
+    n = min(traj.shape[2], vort.shape[0])
+    t = rec["time"][:: max(1, (rec["time"].size - 1) // max(1, n - 1))][:n]
+    pts = traj[:, :, :n].reshape(-1, 2)
+    lo, hi = pts.min(0) - 1.0, pts.max(0) + 1.0
+    start = np.floor(lo / box) * box
+    reps = np.ceil((hi - start) / box).astype(int)
+    extent = [start[0], start[0] + reps[0] * box, start[1], start[1] + reps[1] * box]
+    dist = np.linalg.norm(traj[:, :, :n] - traj[:, :, :1], axis=-1).mean(1)
+    fig, ax = plt.subplots(figsize=(5.6, 5.6))
+    vmax = float(np.abs(vort).max())
+    im = ax.imshow(np.tile(vort[0], (reps[1], reps[0])), origin="lower", extent=extent,
+                   cmap="RdBu_r", vmin=-vmax, vmax=vmax, interpolation="nearest")
+    lines = [[ax.plot([], [], color=COLORS[name], lw=1.2, label=name if i == 0 else None)[0]
+              for i in range(traj.shape[1])] for name in STRATEGIES]
+    ax.plot(traj[:, :, 0, 0].ravel(), traj[:, :, 0, 1].ravel(), "r*", ms=5)  # own starts
+    ax.set_xlim(lo[0], hi[0])
+    ax.set_ylim(lo[1], hi[1])
+    ax.set_aspect("equal")
+    ax.set_xlabel(r"$x/\ell_f$")
+    ax.set_ylabel(r"$y/\ell_f$")
+    ax.legend(fontsize=7, loc="lower right")
+    fig.colorbar(im, ax=ax, shrink=0.7, label=r"$\omega\tau_K$")
+    marks = _distance_inset(fig, ax, t, dist)
+    title = ax.set_title("", fontsize=9)
+    fig.tight_layout()
+
+    def frame(f: int):
+        im.set_data(np.tile(vort[f], (reps[1], reps[0])))
+        for j, row in enumerate(lines):
+            for i, line in enumerate(row):
+                line.set_data(traj[j, i, : f + 1, 0], traj[j, i, : f + 1, 1])
+            marks[j].set_data(t[f: f + 1], dist[j, f: f + 1])
+        title.set_text(f"Ku = {kubo:g}, t = {t[f]:.0f} $\\tau_K$")
+
+    _save(fig, FuncAnimation(fig, frame, frames=n), path, fps)
+    return {"frames": n, "extent": extent, "distance": dist[:, -1].tolist()}
+
+
+def video_cloud(rec: dict, kubo: float, path: Path, fps: int = 8) -> dict:
+    """Video 6-9 at ``kubo`` from ``rec['cloud']`` (``(3, S, frames, 2)``)."""
+    import matplotlib.pyplot as plt
+    from matplotlib.animation import FuncAnimation
+
+    cloud = rec["cloud"]
+    n = cloud.shape[2]
+    t = rec["time"][:: max(1, (rec["time"].size - 1) // max(1, n - 1))][:n]
+    dist = np.linalg.norm(cloud, axis=-1).mean(1)
+    r = float(np.abs(cloud).max()) * 1.05 + 1e-9
+    fig, ax = plt.subplots(figsize=(5.6, 5.6))
+    dots = [ax.plot([], [], ".", ms=2, color=COLORS[name], alpha=0.6, label=name)[0]
+            for name in STRATEGIES]
+    ax.plot(0, 0, "r*", ms=8)
+    ax.set_xlim(-r, r)
+    ax.set_ylim(-r, r)
+    ax.set_aspect("equal")
+    ax.set_xlabel(r"$\Delta x/\ell_f$")
+    ax.set_ylabel(r"$\Delta y/\ell_f$")
+    ax.legend(fontsize=7, loc="lower right", markerscale=4)
+    marks = _distance_inset(fig, ax, t, dist)
+    title = ax.set_title("", fontsize=9)
+    fig.tight_layout()
+
+    def frame(f: int):
+        for j, d in enumerate(dots):
+            d.set_data(cloud[j, :, f, 0], cloud[j, :, f, 1])
+            marks[j].set_data(t[f: f + 1], dist[j, f: f + 1])
+        title.set_text(f"Ku = {kubo:g}, {cloud.shape[1]} swimmers per strategy, "
+                       f"t = {t[f]:.0f} $\\tau_K$")
+
+    _save(fig, FuncAnimation(fig, frame, frames=n), path, fps)
+    return {"frames": n, "mean_distance": dist[:, -1].tolist()}
+
+
+def _save(fig, anim, path: Path, fps: int) -> None:
+    import matplotlib.pyplot as plt
+
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    anim.save(str(path), writer=_writer(fps), dpi=100)  # even pixel sizes (yuv420p)
+    plt.close(fig)
