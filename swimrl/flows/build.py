@@ -14,26 +14,39 @@ from pathlib import Path
 
 import torch
 
-from swimrl.errors import as_float, as_int, key_prefix, require
+from swimrl.errors import as_float, as_int, key_prefix, one_of, require
 from swimrl.flows.base import GriddedFlow
 from swimrl.flows.dns.params import DNSParams
 from swimrl.flows.dns.spinup import SpinupSchedule
 from swimrl.flows.dns.store import store_status
 from swimrl.flows.replay import ReplayFlow
 from swimrl.flows.sources import DNSStore, LiveDNS
-from swimrl.flows.stochastic import StochasticFlow
+from swimrl.flows.stochastic import (
+    AMPLITUDE_MODES,
+    BASIS_MODES,
+    VELOCITY_SCALES,
+    StochasticFlow,
+)
 
 FLOWS = ("stochastic", "dns_replay", "dns")
 
 
 @dataclass(frozen=True)
 class StochasticSpec:
-    """``flow=stochastic``: the paper's flow at Kubo number ``kubo`` (Sec. II B)."""
+    """``flow=stochastic``: the paper's flow at Kubo number ``kubo`` (Sec. II B).
+
+    ``basis``, ``basis_seed``, ``amplitudes``, ``velocity_scale``: readings of the paper's
+    text, defaults as written (:mod:`swimrl.flows.stochastic`).
+    """
 
     kubo: float
     n_modes: int = 5
     n_grid: int = 400
     spacing: float = 0.025
+    basis: str = "redrawn"
+    basis_seed: int = 0
+    amplitudes: str = "stationary"
+    velocity_scale: str = "total"
     name: str = "stochastic"
 
     def __post_init__(self) -> None:
@@ -42,6 +55,10 @@ class StochasticSpec:
         n = self.n_grid
         require(as_int("flow.n_grid", n, low=4) % 2 == 0, "flow.n_grid", n, "an even integer >= 4")
         as_float("flow.spacing", self.spacing, lambda v: v > 0, "> 0 (units ell_f)")
+        one_of("flow.basis", self.basis, BASIS_MODES)
+        as_int("flow.basis_seed", self.basis_seed, low=0)
+        one_of("flow.amplitudes", self.amplitudes, AMPLITUDE_MODES)
+        one_of("flow.velocity_scale", self.velocity_scale, VELOCITY_SCALES)
 
 
 @dataclass(frozen=True)
@@ -114,7 +131,9 @@ def build_flow(
     common = {"device": device, "dtype": dtype, "generator": generator}
     if isinstance(spec, StochasticSpec):
         return StochasticFlow(
-            n_flows, spec.kubo, spec.n_modes, spec.n_grid, spec.spacing, **common
+            n_flows, spec.kubo, spec.n_modes, spec.n_grid, spec.spacing, **common,
+            basis=spec.basis, basis_seed=spec.basis_seed, amplitudes=spec.amplitudes,
+            velocity_scale=spec.velocity_scale,
         )
     if isinstance(spec, LiveDNSSpec):
         seeds = torch.randint(0, 2**31 - 1, (n_flows,), generator=generator, device=device)

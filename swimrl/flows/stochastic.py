@@ -30,6 +30,30 @@ Derivatives are spectral: ``psi_x = IFFT(i k_x psi_hat)``.
 
 OU update (exact for any step): ``c(t+dt) = c(t) e^{-dt/tau_f} + sqrt((1 - e^{-2 dt/tau_f})/M) xi``,
 ``xi ~ N(0, 1)``; ``c(0)`` is drawn from the stationary law ``N(0, 1/M)``.
+
+Readings of the specification (options; the defaults are the paper's text as written,
+issue 11 item 6 evaluates the others at Ku = 1e7, ``docs/results.md``):
+
+* ``basis``: ``"redrawn"`` (default) draws new components ``psi_i`` with every realisation
+  (every flow of an evaluation, every episode of training); ``"fixed"`` draws one set of
+  ``M`` components from its own generator seeded with ``basis_seed`` and gives it to every
+  realisation, which then differ only by ``c_i`` (the paper's "at the start of each
+  episode, the flow coefficients ``c_i`` [...] are randomly sampled"). The ensemble is then
+  conditional on one draw of the ``psi_i``: ``<u.u>`` and ``tau_K`` hold on average over
+  ``basis_seed``, not for each.
+* ``amplitudes``: ``"stationary"`` (default) ``c(0) ~ N(0, 1/M)``; ``"normalised"``
+  ``c(0) = xi / |xi|`` with the same ``xi ~ N(0, 1)`` (uniform on the unit sphere), so
+  ``sum_i c_i(0)^2 = 1`` in every realisation while ``<c_i^2> = 1/M`` still holds: the
+  ensemble ``u_rms`` and ``tau_K`` are unchanged, only the realisation-to-realisation
+  spread of the flow's energy is removed. The OU steps that follow are unchanged (at
+  Ku = 1e7 each ``c_i`` diffuses by ``(2 T / (tau_f M))^{1/2} ~ 2e-3`` over an episode).
+* ``velocity_scale``: ``"total"`` (default) ``u_rms = <u.u>^{1/2}``; ``"component"``: the
+  velocity ``v_s`` and the Kubo number are measured against the one-component rms
+  ``<u_x^2>^{1/2} = u_rms / sqrt(2)``. The fields are the same; :attr:`u_rms` (the
+  reference velocity the environment scales ``v_s`` by) becomes ``1/sqrt(2)`` and
+  ``tau_f = Ku ell_f / (u_rms / sqrt(2))``. So ``v_s = 0.707`` reads ``0.5 <u.u>^{1/2}`` and
+  Ku reads ``Ku sqrt(2)`` in the default's units; ``tau_K = 0.5`` is unchanged.
+* The box ``L = n_grid * spacing`` (10 ``ell_f`` by default) is set by ``n_grid``.
 """
 
 from __future__ import annotations
@@ -43,6 +67,11 @@ from swimrl.flows.grid import PeriodicGrid
 
 #: Kolmogorov time of the model in units ell_f / u_rms (see module docstring).
 TAU_K = 0.5
+
+#: Options of :class:`StochasticFlow` (readings of the paper's text; first = default).
+BASIS_MODES = ("redrawn", "fixed")
+AMPLITUDE_MODES = ("stationary", "normalised")
+VELOCITY_SCALES = ("total", "component")
 
 
 def gaussian_spectrum(grid: PeriodicGrid, amplitude: float, ell: float, device) -> torch.Tensor:
@@ -82,7 +111,9 @@ class StochasticFlow(GriddedFlow):
     """``n_flows`` independent realisations of the stochastic flow at Kubo number ``kubo``.
 
     Each realisation has its own ``M`` components ``psi_i`` and coefficients ``c_i``;
-    :meth:`reset` redraws both for the selected flows.
+    :meth:`reset` redraws both for the selected flows (with ``basis="fixed"``: only the
+    ``c_i``, every realisation sharing one set of ``psi_i``). ``amplitudes`` and
+    ``velocity_scale``: see the module docstring.
     """
 
     u_rms = 1.0
@@ -99,44 +130,70 @@ class StochasticFlow(GriddedFlow):
         device: torch.device | str = "cpu",
         dtype: torch.dtype = torch.float32,
         generator: torch.Generator | None = None,
+        basis: str = "redrawn",
+        basis_seed: int = 0,
+        amplitudes: str = "stationary",
+        velocity_scale: str = "total",
     ):
+        for name, value, allowed in (("basis", basis, BASIS_MODES),
+                                     ("amplitudes", amplitudes, AMPLITUDE_MODES),
+                                     ("velocity_scale", velocity_scale, VELOCITY_SCALES)):
+            if value not in allowed:
+                raise ValueError(f"{name}={value!r} must be one of {allowed}")
         grid = PeriodicGrid(n_grid, n_grid * spacing)
         super().__init__(grid, n_flows, n_modes, device, dtype)
         self.kubo = float(kubo)
+        self.amplitudes = amplitudes
+        self.velocity_scale = velocity_scale
+        # the fields always have <u.u>^{1/2} = 1; u_rms is the reference velocity of v_s and Ku
+        self.u_rms = 1.0 if velocity_scale == "total" else math.sqrt(0.5)
         self.tau_f = self.kubo * self.ell_f / self.u_rms
         self.generator = generator
-        amplitude = 0.5 * self.u_rms**2 * self.ell_f**2
+        amplitude = 0.5 * self.ell_f**2  # A = u_rms^2 ell_f^2 / 2 with <u.u> = 1
         self._sqrt_spectrum = gaussian_spectrum(grid, amplitude, self.ell_f, self.device).sqrt()
+        self.fixed_basis: torch.Tensor | None = None
+        if basis == "fixed":
+            own = torch.Generator(device=self.device).manual_seed(int(basis_seed))
+            self.fixed_basis = self.draw_components(1, own)
         self.reset()
 
-    def _randn(self, *shape: int, dtype=None) -> torch.Tensor:
-        return torch.randn(
-            *shape, device=self.device, dtype=dtype or self.dtype, generator=self.generator
-        )
+    def _randn(self, *shape: int, dtype=None, generator=None) -> torch.Tensor:
+        return torch.randn(*shape, device=self.device, dtype=dtype or self.dtype,
+                           generator=generator or self.generator)
 
-    def draw_components(self, count: int) -> torch.Tensor:
-        """Channels of ``count * M`` fresh components: ``(count, n, n, M, 5)`` in ``self.dtype``."""
+    def draw_components(self, count: int, generator: torch.Generator | None = None
+                        ) -> torch.Tensor:
+        """Channels of ``count * M`` fresh components: ``(count, n, n, M, 5)`` in ``self.dtype``
+        (from ``generator``, default the flow's)."""
         n, m = self.grid.n, self.n_basis
         out = torch.empty(count, n, n, m, 5, device=self.device, dtype=self.dtype)
         per = max(1, 2**22 // (m * n * n))  # flows per batch: bounds the float64 work memory
         for f0 in range(0, count, per):
             f1 = min(count, f0 + per)
-            w = self._randn(f1 - f0, m, n, n, dtype=torch.float64)
+            w = self._randn(f1 - f0, m, n, n, dtype=torch.float64, generator=generator)
             psi_hat = self._sqrt_spectrum * torch.fft.fft2(w)
             q = stream_function_channels(psi_hat, self.grid).permute(0, 2, 3, 1, 4)
             out[f0:f1] = q.to(self.dtype)
         return out
 
     def reset(self, flows: torch.Tensor | None = None) -> None:
-        """Redraw components and stationary coefficients ``c_i ~ N(0, 1/M)`` of selected flows."""
+        """Redraw components (unless fixed) and coefficients ``c_i(0)`` of selected flows."""
         if flows is None:
             idx = torch.arange(self.n_flows, device=self.device)
         else:
             idx = flows.nonzero().flatten()
         if idx.numel() == 0:
             return
-        self.basis[idx] = self.draw_components(idx.numel())
-        self.coeffs[idx] = self._randn(idx.numel(), self.n_basis) / math.sqrt(self.n_basis)
+        if self.fixed_basis is None:
+            self.basis[idx] = self.draw_components(idx.numel())
+        else:
+            self.basis[idx] = self.fixed_basis
+        xi = self._randn(idx.numel(), self.n_basis)
+        if self.amplitudes == "stationary":
+            self.coeffs[idx] = xi / math.sqrt(self.n_basis)
+        else:
+            xi = xi.double()
+            self.coeffs[idx] = (xi / xi.norm(dim=1, keepdim=True)).to(self.dtype)
         self.time[idx] = 0.0
 
     def ou_factors(self, dt: float) -> tuple[float, float]:
