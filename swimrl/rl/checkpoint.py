@@ -40,12 +40,29 @@ LEGACY_KEYS = {
     "flow.measure_time": "flow.spinup.measure_time",
     "flow.snapshot_tau_k": "flow.interval_tau_k",
 }
+#: Keys added later, with the value that reproduces what the code did before they existed
+#: (stochastic flow: the readings of the paper's specification, conf/flow/stochastic.yaml).
+ADDED_KEYS = {
+    "stochastic": {
+        "flow.amplitudes": "stationary",
+        "flow.basis": "redrawn",
+        "flow.basis_seed": 0,
+        "flow.velocity_scale": "total",
+    },
+}
 
 
 def upgrade_config(config: dict) -> dict:
     """A checkpoint's stored config with renamed keys (:data:`LEGACY_KEYS`) moved to their
-    current names; the values are unchanged."""
+    current names and keys added since (:data:`ADDED_KEYS`) set to the value that
+    reproduces the old behaviour; the values present are unchanged."""
     out = _copy(config)
+    flow = out.get("flow") if isinstance(out.get("flow"), dict) else None
+    for key, value in ADDED_KEYS.get(flow.get("name") if flow else None, {}).items():
+        *path, last = key.split(".")
+        node = _node(out, path)
+        if node is not None:
+            node.setdefault(last, value)
     for old, new in LEGACY_KEYS.items():
         *path, last = old.split(".")
         parent = _node(out, path)
