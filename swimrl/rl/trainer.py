@@ -9,7 +9,7 @@ One *update* ``u``:
    ``minibatches_per_epoch`` minibatches: loss ``= loss_objective + loss_entropy +
    loss_critic`` (``ClipPPOLoss``, advantages normalised per minibatch), one backward, the
    gradient norm of actor and critic clipped separately, one Adam step each;
-4. both learning rates step down linearly (``make_schedulers``).
+4. both learning rates step (``make_schedulers``): constant, or down linearly (``optim.anneal``).
 
 Periodic deterministic evaluations (``Lambda = Lambda_max tanh(mu)``) on held-out flows use
 :func:`swimrl.evaluation.rollout.evaluate` (``seed + EVAL_SEED_OFFSET``, the same flows every time,
