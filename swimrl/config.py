@@ -15,7 +15,7 @@ import dataclasses
 import math
 from pathlib import Path
 
-from omegaconf import DictConfig, OmegaConf
+from omegaconf import DictConfig, ListConfig, OmegaConf
 
 from swimrl.analysis.figures import FiguresConfig
 from swimrl.analysis.fit_minimal import FitConfig
@@ -115,9 +115,13 @@ def flow_spec(flow: DictConfig, rt: Runtime) -> FlowSpec:
             velocity_scale=flow.get("velocity_scale", "total"),
         )
     if flow.name == "dns_replay":
+        paths = flow.path if isinstance(flow.path, ListConfig | list | tuple) else [flow.path]
+        decode_n = flow.get("decode_n", None)
         return StoredRunSpec(
-            Path(str(flow.path)),
+            tuple(Path(str(p)) for p in paths),
             allow_incomplete=as_bool("flow.allow_incomplete", flow.get("allow_incomplete", False)),
+            decode_n=None if decode_n is None else _int(decode_n),
+            flows_per_start=_int(flow.get("flows_per_start", 1)),
         )
     return LiveDNSSpec(
         dns=live_dns_params(OmegaConf.to_container(flow.dns), rt.device, rt.dtype),

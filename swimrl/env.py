@@ -264,7 +264,7 @@ class SwimmerEnv(EnvBase):
         pos, theta = self._kernel(
             self.flow.table,
             path,
-            self._flow_index,
+            self.flow.rows(self._flow_index),
             self.pos.view(-1, 2),
             theta,
             shape_factor,

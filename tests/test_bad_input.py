@@ -67,6 +67,12 @@ CASES = [
     # incomplete DNS store (item 7)
     (EVAL, ["flow=dns_replay", "flow.path={tmp}/incomplete.zarr"], "flow.allow_incomplete"),
     (EVAL, ["flow=dns_replay", "flow.path={tmp}/nowhere.zarr"], "flow.path"),
+    (EVAL, ["flow=dns_replay", "flow.path=[{tmp}/incomplete.zarr,{tmp}/nowhere.zarr]",
+            "flow.allow_incomplete=true"], "{tmp}/nowhere.zarr"),
+    (EVAL, ["flow=dns_replay", "flow.path={tmp}/incomplete.zarr", "flow.allow_incomplete=true",
+            "flow.decode_n=7"], "flow.decode_n"),
+    (EVAL, ["flow=dns_replay", "flow.path={tmp}/incomplete.zarr", "flow.allow_incomplete=true",
+            "flow.flows_per_start=0"], "flow.flows_per_start"),
     # DNS config gaps (item 3): store.path={tmp}/store.zarr must not appear
     (DNS, ["store.n_times=0"], "store.n_times=0"),
     (DNS, ["store.chunk_times=0"], "store.chunk_times=0"),

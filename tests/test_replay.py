@@ -14,6 +14,9 @@ from swimrl.flows.replay import ReplayFlow
 class MemorySource:
     """Snapshots Q_j(x) = (1 + j^2/10) * F(x) + j G(x): non-linear in j, so windows matter."""
 
+    n_runs = 1
+    realisation_per_flow = False
+
     def __init__(self, n=16, n_times=40, dt_store=0.07, length=2 * math.pi):
         self.n, self.n_times, self.dt_store, self.length = n, n_times, dt_store, length
         self.u_rms, self.tau_k = 1.3, 0.35
@@ -30,8 +33,8 @@ class MemorySource:
     def snapshot(self, j: int) -> torch.Tensor:
         return (1 + j * j / 10) * self.f + j * self.g
 
-    def channels(self, i0: int, i1: int, flow: int = 0) -> torch.Tensor:
-        assert 0 <= i0 <= i1 <= self.n_times
+    def channels(self, i0: int, i1: int, run: int = 0) -> torch.Tensor:
+        assert 0 <= i0 <= i1 <= self.n_times and run == 0
         self.reads += i1 - i0
         return torch.stack([self.snapshot(j) for j in range(i0, i1)]).float()
 
@@ -132,10 +135,13 @@ def test_live_dns_flow_matches_its_solver(compose_cfg):
     assert torch.equal(run.cache[run.latest], q_now)
     for _ in range(5):
         td = env.step(td.set("action", torch.zeros(2, 4, 1))).get("next")
-    assert int(flow.window_start[0]) > start  # the solver advanced with the swimmers
-    for m in range(flow.n_basis):  # the window holds the solver's snapshots
-        j = int(flow.window_start[0]) + m
-        assert torch.equal(flow.basis[:, :, :, m], run.cache[j])
+    held = flow.held[flow.row]  # (flows, M): snapshot index in each ring slot
+    assert int(held.min()) > start  # the solver advanced with the swimmers
+    for f in range(2):  # the ring holds the solver's snapshots of each realisation
+        for m in range(flow.n_basis):
+            j = int(held[f, m])
+            assert j % flow.n_basis == m
+            assert torch.equal(flow.basis[flow.row[f], :, :, m], run.cache[j][f])
     assert torch.isfinite(td["distance"]).all()
     assert torch.allclose(flow.coeffs.sum(-1), torch.ones(2))
 
@@ -147,3 +153,92 @@ def test_live_dns_bad_parameter_is_named(compose_cfg):
         eval_setup(compose_cfg(["flow=dns", "flow.spinup.measure_time=20"]))
     with pytest.raises(ValueError, match="flow.dns.nu"):
         eval_setup(compose_cfg(["flow=dns", "flow.dns.nu=-1"]))
+
+
+class RunsSource(MemorySource):
+    """Two runs: run r's snapshot j is (1 + r) * MemorySource's."""
+
+    n_runs = 2
+
+    def channels(self, i0: int, i1: int, run: int = 0) -> torch.Tensor:
+        assert run in (0, 1)
+        self.reads += i1 - i0
+        return torch.stack([(1 + run) * self.snapshot(j) for j in range(i0, i1)]).float()
+
+
+def test_flows_of_a_group_share_a_run_a_start_and_one_decode():
+    src = RunsSource(n_times=200)
+    gen = torch.Generator().manual_seed(4)
+    flow = ReplayFlow(src, 6, interval=0.07, episode_time=5.0, dtype=torch.float64,
+                      generator=gen, flows_per_start=3)
+    assert flow.basis.shape[0] == 2  # two rows for six flows
+    for group in (slice(0, 3), slice(3, 6)):
+        assert len(set(flow.run[group].tolist())) == 1
+        assert len(set(flow.start[group].tolist())) == 1
+        assert len(set(flow.row[group].tolist())) == 1
+    decodes = flow.decodes
+    for _ in range(10):
+        flow.coefficient_path(7, 0.01)
+        for f in range(6):  # each flow is its own run at its own time, exactly
+            s = flow.start[f].item() + flow.time[f].item() / src.dt_store
+            j = math.floor(s + 1e-9)
+            a = s - j
+            want = (1 + flow.run[f].item()) * ((1 - a) * src.snapshot(j)
+                                               + a * src.snapshot(j + 1))
+            assert torch.allclose(flow.grid_fields([f])[0], want.double(), atol=1e-9)
+    assert flow.decodes - decodes <= 2 * 10 + 2  # one per row per interval of one Δ
+
+
+def test_a_partial_reset_gives_the_reset_flows_a_row_of_their_own():
+    src = RunsSource(n_times=200)
+    flow = ReplayFlow(src, 4, interval=0.07, episode_time=5.0, dtype=torch.float64,
+                      generator=torch.Generator().manual_seed(2), flows_per_start=4)
+    flow.coefficient_path(7, 0.01)
+    kept = flow.grid_fields([0, 1])
+    flow.reset(torch.tensor([False, False, True, True]))
+    assert flow.row[2] == flow.row[3] != flow.row[0] == flow.row[1]
+    assert torch.equal(flow.grid_fields([0, 1]), kept)  # untouched flows keep their state
+    assert flow.time[2] == 0 and flow.time[0] > 0
+    flow.coefficient_path(7, 0.01)  # rows at different times advance together
+    assert torch.allclose(flow.coeffs.sum(-1), torch.ones(flow.basis.shape[0], dtype=torch.float64))
+
+
+@pytest.mark.parametrize("kernel", ["eager", "fused"])
+def test_shared_decoding_gives_bit_identical_trajectories(kernel):
+    """Six flows replaying two (run, start) pairs: one row per pair (shared decoding) and one
+    row per flow (decoding per flow) move the swimmers identically, bit for bit."""
+    if kernel == "fused":
+        from swimrl.physics.kernels import load_cpu_kernel
+
+        if load_cpu_kernel() is None:
+            pytest.skip("no C++ toolchain for the fused kernel")
+
+    class Pairs(ReplayFlow):  # flows 0-2: run 1 from index 17; flows 3-5: run 0 from 42
+        def start_indices(self, count):
+            return torch.tensor([17, 42]).repeat_interleave(count // 2)
+
+        def start_runs(self, count):
+            return torch.tensor([1, 0]).repeat_interleave(count // 2)
+
+    src = RunsSource(n_times=200)
+    params = EnvParams(duration=2.0)
+    out = []
+    for per_start in (3, 1):
+        flow = Pairs(src, 6, interval=0.1 * src.tau_k, episode_time=2.0 * src.tau_k,
+                     flows_per_start=per_start)
+        env = SwimmerEnv(flow, 5, params, generator=torch.Generator().manual_seed(9),
+                         kernel=kernel)
+        td = env.reset()
+        assert flow.run.tolist() == [1, 1, 1, 0, 0, 0]
+        decodes = flow.decodes
+        for i in range(env.params.n_decisions):
+            act = (0.9 * torch.sin(torch.arange(30.0) + i)).view(6, 5, 1)
+            td = env.step(td.set("action", act)).get("next")
+        out.append((env.pos.clone(), env.theta.clone(), flow.decodes - decodes,
+                    flow.basis.shape[0]))
+    (pos_a, th_a, dec_a, rows_a), (pos_b, th_b, dec_b, rows_b) = out
+    assert torch.equal(pos_a, pos_b) and torch.equal(th_a, th_b)
+    assert (rows_a, rows_b) == (2, 6)
+    # either way each (run, snapshot) is decoded once: the rows of the per-flow replay take
+    # the snapshots their neighbours decoded from the cache
+    assert dec_a == dec_b <= 2 * (env.params.n_decisions + 3)

@@ -186,8 +186,10 @@ def evaluate_shared(setup: EvalSetup, actors: Sequence[Actor], desc: str = "eval
     substeps = n_flows * k * s * params.n_decisions * params.n_substeps
     how = "averaged over flow chunks" + (f", shared by {k} strategies" if k > 1 else "")
     flow_stats = mean_flow_stats(stats, how)
-    store = ({"flow_store": store_record(setup.flow.path)}
-             if isinstance(setup.flow, StoredRunSpec) else {})
+    store = {}
+    if isinstance(setup.flow, StoredRunSpec):
+        records = [store_record(p) for p in setup.flow.paths]
+        store = {"flow_store": records[0]} if len(records) == 1 else {"flow_stores": records}
     return [{**flow_statistics(per_flow[j]), "n_flows": n_flows, "n_swimmers": s,
              "seed": setup.seed, "flow_stats": flow_stats, **store, "wall_s": wall,
              "swimmer_substeps_per_s": substeps / sim_s, "config": setup.record}

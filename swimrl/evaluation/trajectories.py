@@ -68,7 +68,7 @@ class TrajectoryRecorder:
         env, k = self._env, self.field_stride
         if self._chunks or not self.field_every:
             return
-        omega = (env.flow.basis[0, ::k, ::k, :, 4] * env.flow.coeffs[0]).sum(-1)
+        omega = env.flow.grid_fields(torch.zeros(1, dtype=torch.int64), stride=k)[0, ..., 4]
         self._fields.append((omega * env.tau_k).cpu().float().numpy())
         self._field_time.append(i * env.params.update_interval)
 

@@ -36,25 +36,28 @@ def gradient_norm2(q: torch.Tensor) -> torch.Tensor:
 class GriddedFlow:
     """Base class: ``n_flows`` independent realisations of ``q(x,t) = sum_m c_m(t) Q_m(x)``.
 
-    Subclasses fill :attr:`basis` (``(F, n, n, M, 5)``, float) and :attr:`coeffs`
-    (``(F, M)``) and implement :meth:`advance` and :meth:`reset`. ``u_rms`` and ``tau_k``
-    are the flow's reference scales (ensemble values) in its own units.
+    Subclasses fill :attr:`basis` (``(R, n, n, M, 5)``, float) and :attr:`coeffs`
+    (``(R, M)``) and implement :meth:`advance` and :meth:`reset`. A basis row is one
+    realisation; several flows may share a row (a replay in which they replay the same run
+    from the same time): :meth:`rows` maps flows to rows (the identity by default,
+    ``R = F``). ``u_rms`` and ``tau_k`` are the flow's reference scales (ensemble values) in
+    its own units.
     """
 
     u_rms: float = 1.0
     tau_k: float = 1.0
 
-    def __init__(self, grid: PeriodicGrid, n_flows: int, n_basis: int, device, dtype):
+    def __init__(self, grid: PeriodicGrid, n_flows: int, n_basis: int, device, dtype,
+                 n_rows: int | None = None):
         self.grid = grid
         self.n_flows = int(n_flows)
         self.n_basis = int(n_basis)
         self.device = torch.device(device)
         self.dtype = dtype
         n = grid.n
-        self.basis = torch.zeros(
-            n_flows, n, n, n_basis, N_CHANNELS, device=self.device, dtype=dtype
-        )
-        self.coeffs = torch.zeros(n_flows, n_basis, device=self.device, dtype=dtype)
+        rows = self.n_flows if n_rows is None else int(n_rows)
+        self.basis = torch.zeros(rows, n, n, n_basis, N_CHANNELS, device=self.device, dtype=dtype)
+        self.coeffs = torch.zeros(rows, n_basis, device=self.device, dtype=dtype)
         self.time = torch.zeros(n_flows, device=self.device, dtype=torch.float64)
 
     # -- interface for subclasses -------------------------------------------------------------
@@ -66,8 +69,14 @@ class GriddedFlow:
         """Draw new realisations where ``flows`` (bool ``(F,)``) is true (all if None)."""
         raise NotImplementedError
 
+    def rows(self, flow_index: torch.Tensor) -> torch.Tensor:
+        """Basis row (index into :attr:`table` blocks and :attr:`coeffs`) of each flow in
+        ``flow_index``; valid until the next :meth:`reset` or :meth:`coefficient_path`."""
+        return flow_index
+
     def coefficient_path(self, n_steps: int, dt: float) -> torch.Tensor:
-        """Coefficients at ``t, t + dt, ..., t + n_steps dt``: ``(n_steps + 1, F, M)``.
+        """Coefficients of the basis rows at ``t, t + dt, ..., t + n_steps dt``:
+        ``(n_steps + 1, R, M)``.
 
         Advances the flow to ``t + n_steps dt`` (as ``n_steps`` calls of :meth:`advance`).
         """
@@ -80,7 +89,7 @@ class GriddedFlow:
     # -- sampling -----------------------------------------------------------------------------
     @property
     def table(self) -> torch.Tensor:
-        """Basis as a ``(F * n * n, M * 5)`` row table for gathers."""
+        """Basis as a ``(R * n * n, M * 5)`` row table for gathers."""
         return self.basis.view(-1, self.n_basis * N_CHANNELS)
 
     def sample(
@@ -89,14 +98,20 @@ class GriddedFlow:
         """Channels ``q(x, t)``, ``(P, 5)``, at ``pos`` ``(P, 2)`` in flows ``flow_index``.
 
         ``q = sum_m c_m(t) I[Q_m](x)`` with ``I`` the bilinear periodic interpolant and
-        ``c`` the current coefficients (or ``coeffs``, ``(F, M)``).
+        ``c`` the current coefficients of the basis rows (or ``coeffs``, ``(R, M)``).
         """
         c = self.coeffs if coeffs is None else coeffs
-        return sample_basis(self.table, self.grid.n, self.grid.spacing, flow_index, c, pos)
+        rows = self.rows(flow_index)
+        return sample_basis(self.table, self.grid.n, self.grid.spacing, rows, c, pos)
 
-    def grid_fields(self) -> torch.Tensor:
-        """Current node values ``q_j(t) = sum_m c_m(t) Q_m(x_j)``, shape ``(F, n, n, 5)``."""
-        return torch.einsum("fm,fyxmc->fyxc", self.coeffs, self.basis)
+    def grid_fields(self, flows: torch.Tensor | None = None, stride: int = 1) -> torch.Tensor:
+        """Current node values ``q_j(t) = sum_m c_m(t) Q_m(x_j)`` of ``flows`` (all if None)
+        on every ``stride``-th node: ``(len(flows), n/stride, n/stride, 5)``."""
+        if flows is None:
+            flows = torch.arange(self.n_flows, device=self.device)
+        r = self.rows(torch.as_tensor(flows, device=self.device).reshape(-1))
+        basis = self.basis[r][:, ::stride, ::stride]
+        return torch.einsum("fm,fyxmc->fyxc", self.coeffs[r], basis)
 
     def measured_stats(self) -> dict[str, float]:
         """Grid averages over all flows: ``u_rms = <u.u>^{1/2}``, ``tau_K = <A_ij A_ij>^{-1/2}``."""

@@ -20,7 +20,7 @@ from swimrl.flows.dns.params import DNSParams
 from swimrl.flows.dns.spinup import SpinupSchedule
 from swimrl.flows.dns.store import store_status
 from swimrl.flows.replay import ReplayFlow
-from swimrl.flows.sources import DNSStore, LiveDNS
+from swimrl.flows.sources import DNSStore, LiveDNS, StoreSet
 from swimrl.flows.stochastic import (
     AMPLITUDE_MODES,
     BASIS_MODES,
@@ -63,19 +63,36 @@ class StochasticSpec:
 
 @dataclass(frozen=True)
 class StoredRunSpec:
-    """``flow=dns_replay``: a run stored by ``swimrl-dns`` at ``path``."""
+    """``flow=dns_replay``: runs stored by ``swimrl-dns`` at ``paths`` (one or several
+    independent realisations), decoded on ``decode_n`` nodes per side (None: the run's
+    grid), ``flows_per_start`` flows sharing each drawn (run, start time)."""
 
-    path: Path
+    paths: tuple[Path, ...]
     allow_incomplete: bool = False
+    decode_n: int | None = None
+    flows_per_start: int = 1
     name: str = "dns_replay"
 
     def __post_init__(self) -> None:
-        status = store_status(self.path)
-        require(status not in (None, "unknown"), "flow.path", str(self.path),
-                "a DNS store made by swimrl-dns (see docs/dns.md)")
-        require(status == "complete" or self.allow_incomplete, "flow.path", str(self.path),
-                f"a finished DNS store (this one's status is {status!r}: finish it with "
-                "swimrl-dns, or pass flow.allow_incomplete=true to replay what it holds)")
+        require(len(self.paths) > 0, "flow.path", "[]", "a store path or a list of them")
+        if len(set(self.paths)) != len(self.paths):
+            require(False, "flow.path", [str(p) for p in self.paths], "distinct stores")
+        for path in self.paths:
+            status = store_status(path)
+            require(status not in (None, "unknown"), "flow.path", str(path),
+                    "a DNS store made by swimrl-dns (see docs/dns.md)")
+            require(status == "complete" or self.allow_incomplete, "flow.path", str(path),
+                    f"a finished DNS store (this one's status is {status!r}: finish it with "
+                    "swimrl-dns, or pass flow.allow_incomplete=true to replay what it holds)")
+        if self.decode_n is not None:
+            n = as_int("flow.decode_n", self.decode_n, low=8)
+            require(n % 2 == 0, "flow.decode_n", n, "null or an even integer >= 8")
+        as_int("flow.flows_per_start", self.flows_per_start, low=1)
+
+    @property
+    def path(self) -> Path:
+        """The first store."""
+        return self.paths[0]
 
 
 @dataclass(frozen=True)
@@ -140,7 +157,11 @@ def build_flow(
         source = LiveDNS(
             spec.dns, [int(x) for x in seeds.tolist()], spec.spinup, spec.interval_tau_k
         )
+        per_start = 1
     else:
-        source = DNSStore(Path(spec.path))
+        stores = [DNSStore(Path(p), decode_n=spec.decode_n) for p in spec.paths]
+        source = stores[0] if len(stores) == 1 else StoreSet(stores)
+        per_start = spec.flows_per_start
     tau_k = source.tau_k
-    return ReplayFlow(source, n_flows, interval * tau_k, duration * tau_k, **common)
+    return ReplayFlow(source, n_flows, interval * tau_k, duration * tau_k, **common,
+                      flows_per_start=per_start)

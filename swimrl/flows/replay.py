@@ -1,25 +1,38 @@
-r"""Replay of stored flow snapshots (e.g. a DNS run) as a flow for the swimmer environment.
+r"""Replay of stored flow snapshots (e.g. DNS runs) as a flow for the swimmer environment.
 
-Snapshots ``Q_j(x)`` (five channels on a periodic grid) are stored at times ``j Δ``. Between
-them the flow is linear in time:
+Snapshots ``Q_j(x)`` (five channels on a periodic grid) of a run are stored at times
+``j Δ``. Between them the flow is linear in time:
 
 ``q(x, t) = (1 - a) Q_j(x) + a Q_{j+1}(x)``,  ``t = (j + a) Δ``,  ``0 <= a < 1``,
 
-which is the :class:`GriddedFlow` form ``sum_m c_m(t) Q_m`` over a sliding window of
-``M`` consecutive snapshots with hat-function weights
-``c_m(t) = max(0, 1 - |t/Δ - (j_0 + m)|)``. The window is chosen per flow and per
-decision interval so that it covers the whole interval (``M = T_u/Δ + 1`` snapshots when
-``T_u`` is a multiple of ``Δ``, else ``ceil(T_u/Δ) + 2``); only snapshots new to the window
-are read. Spatially the fields are periodically extended and
-interpolated bilinearly, as for the stochastic flow. Each realisation (row of the batch)
-starts its episode at a uniformly random stored time index (the swimmers' random start
-positions supply the random place), or, for a source that produces its snapshots on demand
-(``n_times = None``, a DNS stepped alongside), at the source's newest snapshot.
+which is the :class:`GriddedFlow` form ``sum_m c_m(t) Q_m`` over a window of ``M``
+consecutive snapshots with hat-function weights ``c_m(t) = max(0, 1 - |s - j_m|)``,
+``s = j_0 + t/Δ`` (``j_0`` the episode's start index, ``j_m`` the snapshot held in slot
+``m``). The window covers a whole decision interval (``M = T_u/Δ + 1`` snapshots when
+``T_u`` is a multiple of ``Δ``, else ``ceil(T_u/Δ) + 2``) and is a ring: snapshot ``j`` sits
+in slot ``j mod M``, so sliding the window writes only the snapshots new to it.
+
+Decoding a snapshot (reading it and transforming it to node values) costs far more than
+moving swimmers through it, so it is done once for all the swimmers that need it:
+
+* flows that replay the same run from the same start time share one basis row
+  (:meth:`GriddedFlow.rows`); ``flows_per_start`` consecutive flows of a reset draw one
+  (run, start) together, so ``F`` flows need ``F / flows_per_start`` decodes per new
+  snapshot instead of ``F``;
+* decoded snapshots are kept in a small least-recently-used cache keyed by (run, index), so
+  rows that need the same snapshot at the same time decode it once.
+
+A reset draws, per group of flows, a run ``r ~ U{0..n_runs-1}`` (only when the source holds
+several) and a start index ``j_0 ~ U{0..n_times - needed}``; the swimmers' random start
+positions supply the random place. A source that produces snapshots on demand
+(``n_times = None``, a DNS stepped alongside) has one realisation per flow and starts each
+episode at its newest snapshot.
 """
 
 from __future__ import annotations
 
 import math
+from collections import OrderedDict
 from typing import Protocol
 
 import torch
@@ -29,12 +42,15 @@ from swimrl.flows.grid import PeriodicGrid
 
 
 class SnapshotSource(Protocol):
-    """What a replay needs from a run (:mod:`swimrl.flows.sources`).
+    """What a replay needs from a set of runs (:mod:`swimrl.flows.sources`).
 
-    ``n_times`` is the number of stored snapshots, or None for a run that produces them on
-    demand; such a run's newest snapshot is ``latest``.
+    ``n_times`` is the number of stored snapshots per run, or None for runs that produce
+    them on demand; such a source's newest snapshot is ``latest``. ``realisation_per_flow``:
+    run ``f`` belongs to flow ``f`` (``n_runs`` equals the number of flows).
     """
 
+    n_runs: int
+    realisation_per_flow: bool
     n_times: int | None
     dt_store: float
     u_rms: float
@@ -42,13 +58,21 @@ class SnapshotSource(Protocol):
     length: float
     n: int
 
-    def channels(self, i0: int, i1: int, flow: int = 0) -> torch.Tensor:
-        """Snapshots ``i0 <= j < i1`` seen by realisation ``flow``, ``(i1 - i0, n, n, 5)``."""
+    def channels(self, i0: int, i1: int, run: int = 0) -> torch.Tensor:
+        """Snapshots ``i0 <= j < i1`` of run ``run``, ``(i1 - i0, n, n, 5)``."""
         ...
 
 
+def window_size(interval: float, delta: float) -> int:
+    """Snapshots ``M`` a window needs to cover one decision interval ``T_u`` (``Δ`` apart)."""
+    ratio = interval / delta
+    if abs(ratio - round(ratio)) < 1e-6 and round(ratio) >= 1:
+        return round(ratio) + 1  # intervals start on stored times: no extra snapshot
+    return math.ceil(ratio) + 2
+
+
 class ReplayFlow(GriddedFlow):
-    """``n_flows`` replays of one stored run, each from its own random start time."""
+    """``n_flows`` replays of stored runs; ``flows_per_start`` flows share each start."""
 
     def __init__(
         self,
@@ -59,15 +83,13 @@ class ReplayFlow(GriddedFlow):
         device: torch.device | str = "cpu",
         dtype: torch.dtype = torch.float32,
         generator: torch.Generator | None = None,
+        flows_per_start: int = 1,
+        cache_size: int | None = None,
     ):
         """``interval``: decision interval ``T_u`` and ``episode_time``: ``T``, in flow units."""
         self.source = source
         self.delta = float(source.dt_store)
-        ratio = interval / self.delta
-        if abs(ratio - round(ratio)) < 1e-6 and round(ratio) >= 1:
-            window = round(ratio) + 1  # intervals start on stored times: no extra snapshot
-        else:
-            window = math.ceil(ratio) + 2
+        window = window_size(interval, self.delta)
         needed = math.ceil(episode_time / self.delta - 1e-9) + 1
         if source.n_times is not None and needed > source.n_times:
             raise ValueError(
@@ -77,15 +99,32 @@ class ReplayFlow(GriddedFlow):
                 "or shorten episode.duration"
             )
         self.max_start = None if source.n_times is None else source.n_times - needed
+        self.per_flow = bool(getattr(source, "realisation_per_flow", False))
+        if self.per_flow and source.n_runs != n_flows:
+            raise ValueError(f"the source has {source.n_runs} realisations for {n_flows} flows")
+        self.flows_per_start = 1 if self.per_flow else max(1, int(flows_per_start))
+        rows = math.ceil(n_flows / self.flows_per_start)
         grid = PeriodicGrid(int(source.n), float(source.length))
-        super().__init__(grid, n_flows, window, device, dtype)
+        super().__init__(grid, n_flows, window, device, dtype, n_rows=rows)
         self.u_rms = float(source.u_rms)
         self.tau_k = float(source.tau_k)
         self.generator = generator
-        self.start = torch.zeros(n_flows, dtype=torch.int64)  # stored index of t = 0
-        self.window_start = torch.full((n_flows,), -(10**9), dtype=torch.int64)
+        self.cache: OrderedDict[tuple[int, int], torch.Tensor] = OrderedDict()
+        self.cache_size = window + 1 if cache_size is None else int(cache_size)
+        self.decodes = 0  # snapshots decoded so far (benchmarks and tests)
+        # per flow: run, stored index of t = 0, basis row
+        self.run = torch.zeros(n_flows, dtype=torch.int64)
+        self.start = torch.zeros(n_flows, dtype=torch.int64)
+        self.row = torch.full((n_flows,), -1, dtype=torch.int64)
+        self._row_dev = self.row.to(self.device)
+        # per row: run, start, time, stored index held in each ring slot (-1: none), in use
+        self.row_run = torch.zeros(rows, dtype=torch.int64)
+        self.row_start = torch.zeros(rows, dtype=torch.int64)
+        self.row_time = torch.zeros(rows, dtype=torch.float64)
+        self.held = torch.full((rows, window), -1, dtype=torch.int64)
         self.reset()
 
+    # -- episodes -----------------------------------------------------------------------------
     def start_indices(self, count: int) -> torch.Tensor:
         """Stored index of ``t = 0`` for ``count`` new episodes: ``j ~ U{0..max_start}`` (a run
         producing snapshots on demand: its newest one)."""
@@ -95,54 +134,110 @@ class ReplayFlow(GriddedFlow):
             0, self.max_start + 1, (count,), generator=self.generator, device=self.device
         ).cpu()
 
+    def start_runs(self, count: int) -> torch.Tensor:
+        """Run replayed by ``count`` new episodes: ``r ~ U{0..n_runs-1}`` (no draw for one run)."""
+        if self.source.n_runs == 1:
+            return torch.zeros(count, dtype=torch.int64)
+        return torch.randint(0, self.source.n_runs, (count,), generator=self.generator,
+                             device=self.device).cpu()
+
     def reset(self, flows: torch.Tensor | None = None) -> None:
-        """New episodes (from :meth:`start_indices`) for the selected flows."""
+        """New episodes for the selected flows (bool ``(F,)``; all if None): consecutive
+        groups of ``flows_per_start`` of them draw one (run, start) and share a basis row."""
         sel = torch.ones(self.n_flows, dtype=torch.bool) if flows is None else flows.cpu()
         idx = sel.nonzero().flatten()
         if idx.numel() == 0:
             return
-        self.start[idx] = self.start_indices(idx.numel())
+        self.row[idx] = -1
+        groups = list(idx.split(self.flows_per_start))
+        starts = self.start_indices(len(groups))
+        runs = idx.clone() if self.per_flow else self.start_runs(len(groups))
+        new_rows = []
+        for group, run, start in zip(groups, runs.tolist(), starts.tolist(), strict=True):
+            r = self._free_row()
+            if int(self.row_run[r]) != run:
+                self.held[r] = -1  # its ring holds another run's snapshots
+            self.row[group] = r
+            self.run[group], self.start[group] = run, start
+            self.row_run[r], self.row_start[r], self.row_time[r] = run, start, 0.0
+            new_rows.append(r)
+        self._row_dev = self.row.to(self.device)
         self.time[idx.to(self.time.device)] = 0.0
-        self.window_start[idx] = -(10**9)
-        self._load_window(idx, self.start[idx])
-        self.coeffs[idx.to(self.device)] = self._weights(self.time[idx.to(self.time.device)], idx)
+        rows = torch.tensor(new_rows, dtype=torch.int64)
+        self._load(rows, self.row_start[rows])
+        self.coeffs[rows.to(self.device)] = self._weights(self.row_time[rows][None], rows)[0]
 
+    def _free_row(self) -> int:
+        """A basis row no flow uses (the basis grows by one row if there is none)."""
+        used = torch.zeros(self.basis.shape[0], dtype=torch.bool)
+        live = self.row[self.row >= 0]
+        used[live] = True
+        free = (~used).nonzero().flatten()
+        if free.numel():
+            return int(free[0])
+        self.basis = torch.cat([self.basis, torch.zeros_like(self.basis[:1])])
+        self.coeffs = torch.cat([self.coeffs, torch.zeros_like(self.coeffs[:1])])
+        self.row_run = torch.cat([self.row_run, self.row_run[:1]])
+        self.row_start = torch.cat([self.row_start, self.row_start[:1]])
+        self.row_time = torch.cat([self.row_time, self.row_time[:1]])
+        self.held = torch.cat([self.held, torch.full_like(self.held[:1], -1)])
+        return self.basis.shape[0] - 1
 
-    def _load_window(self, flows: torch.Tensor, first: torch.Tensor) -> None:
-        """Make snapshots ``first .. first + M - 1`` the basis of each flow in ``flows``."""
+    def rows(self, flow_index: torch.Tensor) -> torch.Tensor:
+        """Basis row of each flow (flows replaying one run from one start share a row)."""
+        return self._row_dev[flow_index]
+
+    # -- snapshots ----------------------------------------------------------------------------
+    def snapshot(self, run: int, j: int) -> torch.Tensor:
+        """Decoded snapshot ``j`` of run ``run``, ``(n, n, 5)`` (from the cache if held)."""
+        key = (run, j)
+        if key in self.cache:
+            self.cache.move_to_end(key)
+            return self.cache[key]
+        q = self.source.channels(j, j + 1, run)[0].to(device=self.device, dtype=self.dtype)
+        self.decodes += 1
+        self.cache[key] = q
+        while len(self.cache) > self.cache_size:
+            self.cache.popitem(last=False)
+        return q
+
+    def _load(self, rows: torch.Tensor, first: torch.Tensor) -> None:
+        """Make snapshots ``first .. first + M - 1`` the window of each row in ``rows``
+        (snapshot ``j`` in ring slot ``j mod M``; only those not already held are written)."""
         m = self.n_basis
-        for f, j0 in zip(flows.tolist(), first.tolist(), strict=True):
-            old = int(self.window_start[f])
-            shift = j0 - old
-            if 0 < shift < m:  # keep the overlap, read only the new snapshots
-                self.basis[f, :, :, : m - shift] = self.basis[f, :, :, shift:].clone()
-                new = self.source.channels(old + m, j0 + m, f)
-                self.basis[f, :, :, m - shift :] = new.permute(1, 2, 0, 3).to(self.basis)
-            elif shift != 0:
-                snaps = self.source.channels(j0, j0 + m, f)
-                self.basis[f] = snaps.permute(1, 2, 0, 3).to(self.basis)
-            self.window_start[f] = j0
+        for r, j0 in zip(rows.tolist(), first.tolist(), strict=True):
+            run = int(self.row_run[r])
+            for j in range(j0, j0 + m):
+                slot = j % m
+                if int(self.held[r, slot]) != j:
+                    self.basis[r, :, :, slot] = self.snapshot(run, j)
+                    self.held[r, slot] = j
 
-    def _weights(self, time: torch.Tensor, flows: torch.Tensor) -> torch.Tensor:
-        """Hat weights ``c_m = max(0, 1 - |s - (j_0 + m)|)``, ``s = start + t/Δ``; ``(len, M)``."""
-        s = self.start[flows].double() + time.cpu().double() / self.delta
-        rel = s[:, None] - self.window_start[flows].double()[:, None]
-        m = torch.arange(self.n_basis, dtype=torch.float64)
-        w = (1 - (rel - m).abs()).clamp_min(0)
+    def _weights(self, times: torch.Tensor, rows: torch.Tensor) -> torch.Tensor:
+        """Hat weights ``c_m = max(0, 1 - |s - j_m|)``, ``s = start + t/Δ``, of the ring slots
+        at row times ``times`` ``(K, len(rows))``; ``(K, len(rows), M)``."""
+        s = self.row_start[rows].double() + times / self.delta
+        held = self.held[rows].double()
+        w = (1 - (s[..., None] - held).abs()).clamp_min(0) * (held >= 0)
         return w.to(device=self.device, dtype=self.dtype)
 
+    # -- time ---------------------------------------------------------------------------------
     def coefficient_path(self, n_steps: int, dt: float) -> torch.Tensor:
-        """Weights at ``t + k dt`` (``k = 0..n_steps``) over a window covering the interval."""
-        flows = torch.arange(self.n_flows)
-        t0 = self.time.cpu().double()
-        first = (self.start.double() + t0 / self.delta + 1e-6).floor().to(torch.int64)
-        last = self.start.double() + (t0 + n_steps * dt) / self.delta
+        """Weights of every basis row at ``t + k dt`` (``k = 0..n_steps``), ``(K+1, R, M)``,
+        over windows covering the interval."""
+        rows = torch.unique(self.row[self.row >= 0])
+        t0 = self.row_time[rows]
+        s0 = self.row_start[rows].double() + t0 / self.delta
+        first = (s0 + 1e-6).floor().to(torch.int64)
+        last = self.row_start[rows].double() + (t0 + n_steps * dt) / self.delta
         end = math.inf if self.source.n_times is None else self.source.n_times - 1
         if torch.any(last > first + self.n_basis - 1 + 1e-6) or torch.any(last > end + 1e-6):
             raise RuntimeError("replay window too short for the interval (or past the run)")
-        self._load_window(flows, first)
+        self._load(rows, first)
         times = t0[None, :] + dt * torch.arange(n_steps + 1, dtype=torch.float64)[:, None]
-        path = torch.stack([self._weights(t, flows) for t in times])
+        path = torch.zeros(n_steps + 1, *self.coeffs.shape, device=self.device, dtype=self.dtype)
+        path[:, rows.to(self.device)] = self._weights(times, rows)
+        self.row_time[rows] += n_steps * dt
         self.time += n_steps * dt
         self.coeffs.copy_(path[-1])
         return path

@@ -1,11 +1,19 @@
 r"""Snapshot sources of the replay flow: a stored DNS run and a DNS running alongside.
 
-Both implement :class:`swimrl.flows.replay.SnapshotSource`: snapshots ``Q_j`` (five channels
-on the nodes) ``Δ = dt_store`` apart, ``channels(i0, i1, flow)``, and the reference scales
-``u_rms``, ``tau_k`` in which the swimmers' parameters are expressed.
+All implement :class:`swimrl.flows.replay.SnapshotSource`: ``n_runs`` realisations of
+snapshots ``Q_j`` (five channels on the nodes) ``Δ = dt_store`` apart,
+``channels(i0, i1, run)``, and the reference scales ``u_rms``, ``tau_k`` in which the
+swimmers' parameters are expressed.
 
 * :class:`DNSStore` reads a run written by ``swimrl-dns`` (``flow=dns_replay``); channels are
-  reconstructed from the stored vorticity coefficients by spectral differentiation.
+  reconstructed from the stored vorticity coefficients by spectral differentiation, on the
+  run's own grid or on a coarser decode grid of ``n_d`` nodes per side (``flow.decode_n``):
+  the retained modes ``|m_x|, |m_y| <= K`` with ``K <= n_d/2 - 1`` are kept exactly, so for
+  ``n_d > 2K`` the decoded nodes sample the same band-limited field, and only the bilinear
+  interpolation between nodes (error ``~ h^2``) differs; smaller ``n_d`` also truncates
+  ``K`` (docs/dns.md has the measured errors).
+* :class:`StoreSet` is several stored runs (independent realisations, e.g. seeds) replayed
+  as one source: ``channels(i0, i1, run)`` reads run ``run``.
 * :class:`LiveDNS` (``flow=dns``) is a batch of ``F`` independent DNS realisations, one per
   flow, spun up from rest (:mod:`swimrl.flows.dns.spinup`: ``u_rms`` and ``tau_K`` are
   measured over the end of the spin-up). Afterwards the solver produces a snapshot every
@@ -27,7 +35,7 @@ import zarr
 
 from swimrl.flows.base import CHANNELS
 from swimrl.flows.dns import DNS, DNSParams, flow_channels
-from swimrl.flows.dns.grid import SpectralGrid
+from swimrl.flows.dns.grid import SpectralGrid, dealias_cutoff
 from swimrl.flows.dns.spinup import SpinupSchedule, spin_up
 from swimrl.flows.dns.store import unpack
 
@@ -39,7 +47,12 @@ class DNSStore:
     ``n``, ``times``, ``attrs`` and :meth:`channels`.
     """
 
-    def __init__(self, path: str | Path, device: torch.device | str = "cpu"):
+    n_runs = 1
+    realisation_per_flow = False
+
+    def __init__(
+        self, path: str | Path, device: torch.device | str = "cpu", decode_n: int | None = None
+    ):
         self.path = Path(path)
         if not self.path.exists():
             raise FileNotFoundError(f"no DNS store at {self.path}")
@@ -48,7 +61,8 @@ class DNSStore:
         if "n" not in self.attrs or "n_written" not in self.attrs:
             raise ValueError(f"{self.path} is not a swimrl DNS store (missing attrs n/n_written)")
         self.device = torch.device(device)
-        self.n = int(self.attrs["n"])
+        self.store_n = int(self.attrs["n"])
+        self.n = self.store_n if decode_n is None else int(decode_n)
         self.length = float(self.attrs["length"])
         self.n_times = int(self.attrs["n_written"])
         self.dt_store = float(self.attrs.get("dt_store", math.nan))
@@ -56,6 +70,7 @@ class DNSStore:
         self.tau_k = float(self.attrs.get("tau_k", math.nan))
         self.channel_names = tuple(self.attrs.get("channel_names", CHANNELS))
         self._grid = SpectralGrid(self.n, self.length, self.device, torch.float32)
+        self.cutoff = min(dealias_cutoff(self.store_n), self.n // 2 - 1)  # modes decoded
 
     @property
     def complete(self) -> bool:
@@ -75,19 +90,71 @@ class DNSStore:
         """Unnormalised ``rfft2(omega)`` of snapshots ``i0..i1-1``, ``(i1-i0, N, N//2+1)``."""
         self._check_range(i0, i1)
         c = torch.from_numpy(np.asarray(self.group["omega_hat"][i0:i1])).to(self.device)
-        return unpack(c.to(dtype) * float(self.n) ** 2, self.n)
+        return unpack(c.to(dtype) * float(self.store_n) ** 2, self.store_n)
 
-    def channels(self, i0: int, i1: int, flow: int = 0) -> torch.Tensor:
-        """``(u_x, u_y, S_xx, S_xy, omega)`` at the nodes, ``(i1-i0, N, N, 5)`` float32 (the
-        same stored run for every ``flow``)."""
-        return flow_channels(self.omega_hat(i0, i1), self._grid)
+    def decoded_hat(self, i0: int, i1: int) -> torch.Tensor:
+        """Unnormalised ``rfft2(omega)`` on the decode grid, ``(i1-i0, n_d, n_d//2+1)``:
+        the stored ``c_k`` with ``|m_x|, |m_y| <= cutoff``, times ``n_d^2``."""
+        self._check_range(i0, i1)
+        c = torch.from_numpy(np.asarray(self.group["omega_hat"][i0:i1])).to(self.device)
+        big, k = dealias_cutoff(self.store_n), self.cutoff
+        if k < big:
+            c = c[:, big - k: big + k + 1, : k + 1]
+        out = torch.zeros((i1 - i0, self.n, self.n // 2 + 1), dtype=torch.complex64,
+                          device=self.device)
+        iy = torch.remainder(torch.arange(-k, k + 1), self.n).to(self.device)
+        out[:, iy, : k + 1] = c.to(torch.complex64) * float(self.n) ** 2
+        return out
+
+    def channels(self, i0: int, i1: int, run: int = 0) -> torch.Tensor:
+        """``(u_x, u_y, S_xx, S_xy, omega)`` at the decode nodes, ``(i1-i0, n_d, n_d, 5)``
+        float32 (a store is one run: ``run`` must be 0)."""
+        if run != 0:
+            raise IndexError(f"{self.path} holds one run; run {run} requested")
+        return flow_channels(self.decoded_hat(i0, i1), self._grid, cutoff=self.cutoff)
 
     def __len__(self) -> int:
         return self.n_times
 
     def __repr__(self) -> str:
-        return (f"DNSStore({str(self.path)!r}, n={self.n}, n_times={self.n_times}, "
+        return (f"DNSStore({str(self.path)!r}, n={self.store_n}, decode_n={self.n}, "
+                f"n_times={self.n_times}, "
                 f"dt_store={self.dt_store:.4g}, u_rms={self.u_rms:.4g}, tau_k={self.tau_k:.4g})")
+
+
+class StoreSet:
+    """Several stored runs (independent realisations) as one source of ``n_runs`` runs.
+
+    The runs must share the grid, box and ``dt_store``; ``n_times`` is the shortest run's,
+    and ``u_rms``, ``tau_k`` are the means of the runs' measured scales (they differ by
+    the sampling error of each run's spin-up measurement, a few per cent).
+    """
+
+    realisation_per_flow = False
+
+    def __init__(self, stores: list[DNSStore]):
+        if not stores:
+            raise ValueError("flow.path: no store given")
+        first = stores[0]
+        for s in stores[1:]:
+            for key in ("store_n", "n", "length", "dt_store"):
+                a, b = getattr(first, key), getattr(s, key)
+                if not math.isclose(a, b, rel_tol=1e-9):
+                    raise ValueError(f"flow.path: {s.path} has {key}={b}, {first.path} has "
+                                     f"{a}; replayed runs must share the grid and dt_store")
+        self.stores = list(stores)
+        self.n_runs = len(stores)
+        self.n, self.length, self.dt_store = first.n, first.length, first.dt_store
+        self.n_times = min(s.n_times for s in stores)
+        self.u_rms = float(np.mean([s.u_rms for s in stores]))
+        self.tau_k = float(np.mean([s.tau_k for s in stores]))
+
+    def channels(self, i0: int, i1: int, run: int = 0) -> torch.Tensor:
+        """Snapshots ``i0 <= j < i1`` of run ``run``, ``(i1-i0, n_d, n_d, 5)``."""
+        return self.stores[run].channels(i0, i1)
+
+    def __repr__(self) -> str:
+        return f"StoreSet({[str(s.path) for s in self.stores]}, n_times={self.n_times})"
 
 
 class LiveDNS:
@@ -106,6 +173,8 @@ class LiveDNS:
         keep: int = 8,
     ):
         self.dns = DNS(params, batch=len(seeds), seeds=seeds)
+        self.n_runs = len(seeds)
+        self.realisation_per_flow = True  # flow f of the replay is realisation f
         scales = spin_up(self.dns, spinup)
         self.u_rms, self.tau_k = scales["u_rms"], scales["tau_k"]
         self.steps_per_snapshot = max(1, round(interval_tau_k * self.tau_k / params.dt))
@@ -120,8 +189,8 @@ class LiveDNS:
     def _channels(self) -> torch.Tensor:
         return flow_channels(self.dns.state.omega_hat, self.dns.grid)
 
-    def channels(self, i0: int, i1: int, flow: int = 0) -> torch.Tensor:
-        """Snapshots ``i0 <= j < i1`` of realisation ``flow``, stepping the solver as needed."""
+    def channels(self, i0: int, i1: int, run: int = 0) -> torch.Tensor:
+        """Snapshots ``i0 <= j < i1`` of realisation ``run``, stepping the solver as needed."""
         while self.latest < i1 - 1:
             self.dns.step(self.steps_per_snapshot)
             self.latest += 1
@@ -130,4 +199,4 @@ class LiveDNS:
         missing = [j for j in range(i0, i1) if j not in self.cache]
         if missing:
             raise RuntimeError(f"live DNS snapshot {missing[0]} is no longer cached")
-        return torch.stack([self.cache[j][flow] for j in range(i0, i1)])
+        return torch.stack([self.cache[j][run] for j in range(i0, i1)])

@@ -114,13 +114,18 @@ def channels_hat(grid: SpectralGrid, omega_hat: torch.Tensor) -> torch.Tensor:
 
 
 def flow_channels(
-    state_or_omega_hat: DNSState | torch.Tensor, grid: SpectralGrid | None = None
+    state_or_omega_hat: DNSState | torch.Tensor,
+    grid: SpectralGrid | None = None,
+    cutoff: int | None = None,
 ) -> torch.Tensor:
     """Node values of ``(u_x, u_y, S_xx, S_xy, omega)``, shape ``(B, N, N, 5)``, ``[b, iy, ix, c]``.
 
     Nodes ``x_j = j L/N`` (:data:`swimrl.flows.fields.CHANNELS` order); computed exactly (to
     round-off) by spectral differentiation of the truncated ``omega_hat``. ``grid`` defaults to
-    a grid inferred from the shape (box ``2 pi``, same device/dtype).
+    a grid inferred from the shape (box ``2 pi``, same device/dtype). ``cutoff``: ``omega_hat``
+    is zero for ``m_x > cutoff``, so the inverse transform along ``y`` runs on the
+    ``cutoff + 1`` columns that hold modes only (a pruned ``irfft2``, the same numbers in
+    ~60 % of the time at 512^2 with the 2/3 rule).
     """
     w_hat = state_or_omega_hat.omega_hat if isinstance(state_or_omega_hat, DNSState) else (
         state_or_omega_hat
@@ -131,9 +136,24 @@ def flow_channels(
     if grid is None:
         real = torch.float64 if w_hat.dtype == torch.complex128 else torch.float32
         grid = _cached_grid(w_hat.shape[-2], w_hat.device, real)
-    q = grid.to_physical(channels_hat(grid, w_hat))  # (B, 5, N, N)
+    if cutoff is None:
+        q = grid.to_physical(channels_hat(grid, w_hat))  # (B, 5, N, N)
+    else:
+        c = cutoff + 1
+        sub = SpectralGridColumns(grid, c)
+        rows = torch.fft.ifft(channels_hat(sub, w_hat[..., :c]), dim=-2)  # (B, 5, N, c)
+        q = torch.fft.irfft(rows, n=grid.n, dim=-1)
     q = q.permute(0, 2, 3, 1).contiguous()
     return q[0] if squeeze else q
+
+
+class SpectralGridColumns:
+    """The wavenumbers of the first ``columns`` ``m_x`` columns of ``grid`` (what
+    :func:`channels_hat` needs)."""
+
+    def __init__(self, grid: SpectralGrid, columns: int):
+        self.kx, self.ky = grid.kx[:, :columns], grid.ky
+        self.inv_k2 = grid.inv_k2[:, :columns]
 
 
 _GRIDS: dict[tuple, SpectralGrid] = {}
