@@ -73,8 +73,12 @@ def test_figure_functions_on_tiny_records(tmp_path):
     assert perf["kubo"] == [0.1, 1.0, 10.0, 1e7] and perf["STO"][0] > perf["naive"][0]
     assert perf["spread"][1.0] == pytest.approx(np.linalg.norm(finals[1.0], axis=-1).mean(1))
     frames = np.arange(5.0) * 1e6
-    curves = {"ku10_seed0": {"frames": frames, "eval/R_hat": np.r_[0.3, np.nan, 0.5, 0.6, 0.62]}}
-    assert figures.fig_training_curves(curves, tmp_path / "f.png") == {"ku10_seed0": 0.62}
+    curves = {"ku10_seed0": {"frames": frames, "eval/R_hat": np.r_[0.3, np.nan, 0.5, 0.6, 0.62]},
+              "ku1e7_seed0": {"frames": frames, "eval/R_hat": np.r_[0.4, 0.5, 0.6, 0.7, 0.71],
+                              "eval/R_hat_sem": np.full(5, 0.01)}}
+    assert figures.fig_training_curves(curves, tmp_path / "f.png") == {
+        "ku10_seed0": 0.62, "ku1e7_seed0": 0.71}
+    assert figures._ku_value("ku1e7") == 1e7 and figures.PAPER_EPISODE_FRAMES == 20000
     r = {"smart": np.array([1.2, 1.0]), "naive": np.array([0.5, 0.5]), "STO": np.array([1, 1.0])}
     sweep = figures.fig_sweep(np.array([1e-3, 1e-2]), r, {k: 0 * v for k, v in r.items()}, "x",
                         tmp_path / "g.png", ratio=True)

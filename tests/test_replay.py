@@ -242,3 +242,37 @@ def test_shared_decoding_gives_bit_identical_trajectories(kernel):
     # either way each (run, snapshot) is decoded once: the rows of the per-flow replay take
     # the snapshots their neighbours decoded from the cache
     assert dec_a == dec_b <= 2 * (env.params.n_decisions + 3)
+
+
+@pytest.mark.parametrize("dt_store", [0.098, 0.0999, 0.1])
+def test_an_episode_from_the_last_start_runs_to_the_end_of_the_run(dt_store):
+    """Δ slightly below T_u (a real store's interval is whole solver steps): the window of
+    the last decision would reach one snapshot past the run; it must not be read."""
+    src = MemorySource(n_times=30, dt_store=dt_store)
+    flow = ReplayFlow(src, 2, interval=0.1, episode_time=2.0, dtype=torch.float64,
+                      generator=torch.Generator().manual_seed(0))
+    flow.start_indices = lambda count: torch.full((count,), flow.max_start, dtype=torch.int64)
+    flow.reset()
+    for _ in range(20):
+        path = flow.coefficient_path(10, 0.01)
+        assert torch.allclose(path.sum(-1), torch.ones(11, 1, dtype=torch.float64))
+    s = flow.start[0].item() + flow.time[0].item() / dt_store
+    assert s <= src.n_times - 1 + 1e-9
+    j = min(math.floor(s + 1e-9), src.n_times - 1)
+    a = s - j
+    want = (1 - a) * src.snapshot(j) + (a * src.snapshot(j + 1) if a > 1e-9 else 0)
+    assert torch.allclose(grid_value(flow, 0), want.double(), atol=1e-6)
+
+
+def test_a_replay_checkpoint_from_before_the_sharing_keys_resumes_as_before(compose_cfg):
+    """A training checkpoint of flow=dns_replay written before flow.decode_n and
+    flow.flows_per_start existed gets the values that reproduce the old replay, which are
+    the defaults: its config then equals today's."""
+    from omegaconf import OmegaConf
+
+    from swimrl.rl.checkpoint import upgrade_config
+
+    now = OmegaConf.to_container(compose_cfg(["flow=dns_replay"], name="train"))
+    old = {**now, "flow": {k: v for k, v in now["flow"].items()
+                           if k not in ("decode_n", "flows_per_start")}}
+    assert upgrade_config(old) == now

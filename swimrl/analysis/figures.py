@@ -15,6 +15,7 @@ from __future__ import annotations
 
 import hashlib
 import json
+import math
 import time
 from collections.abc import Callable
 from dataclasses import asdict, dataclass, replace
@@ -81,7 +82,7 @@ class FiguresConfig:
     """Smart policy at Ku: ``<policies>/ku0.1`` ... ``<policies>/ku1e7`` (a policy spec)."""
     results: Path = Path("docs/results/smart_ku_sweep")
     """``comparison.json`` records of smartPerformance(a)."""
-    curves: Path = Path("docs/results")
+    curves: Path = Path("docs/results/long_runs")
     """Searched for ``curves.csv`` (trainingCurves)."""
     progress: bool = True
 
@@ -464,25 +465,45 @@ def find_curves(root: Path) -> dict[str, Path]:
     return {p.parent.name: p for p in sorted(Path(root).rglob("curves.csv"))}
 
 
+#: frames of one of the paper's training episodes (10 swimmers x 2000 decisions)
+PAPER_EPISODE_FRAMES = 10 * 2000
+
+
+def _ku_value(group: str) -> float:
+    """``"ku1e7"`` -> 1e7 (``inf`` where the group is not ``ku<number>``)."""
+    try:
+        return float(group.removeprefix("ku"))
+    except ValueError:
+        return math.inf
+
+
 def fig_training_curves(curves: dict[str, dict[str, np.ndarray]], path: Path,
                         title: str = "") -> dict:
-    """Held-out ``eval/R_hat`` against frames, one panel per Ku (label prefix ``ku*_``)."""
+    """Held-out ``eval/R_hat`` (+- SEM band where recorded) against training episodes in the
+    paper's unit (10 swimmers x 2000 decisions = 2e4 frames), one panel per Ku (label prefix
+    ``ku*_``), panels in increasing Ku; returns each run's last held-out value."""
     plt = _plt()
     groups: dict[str, list[str]] = {}
     for label in curves:
         groups.setdefault(label.split("_")[0], []).append(label)
-    fig, axes = plt.subplots(1, max(1, len(groups)), figsize=(3.6 * max(1, len(groups)), 3.4),
+    order = sorted(groups, key=lambda g: (_ku_value(g), g))
+    fig, axes = plt.subplots(1, max(1, len(order)), figsize=(3.6 * max(1, len(order)), 3.4),
                              squeeze=False)
     out = {}
-    for a, (ku, labels) in zip(axes[0], sorted(groups.items()), strict=False):
-        for label in labels:
+    for a, ku in zip(axes[0], order, strict=False):
+        for label in sorted(groups[ku]):
             c = curves[label]
             ok = np.isfinite(c["eval/R_hat"])
-            a.plot(c["frames"][ok] / 1e6, c["eval/R_hat"][ok], marker="o", ms=2, label=label)
-            out[label] = float(c["eval/R_hat"][ok][-1])
-        a.set_xlabel("training frames (millions of decisions)")
+            x, y = c["frames"][ok] / PAPER_EPISODE_FRAMES, c["eval/R_hat"][ok]
+            (line,) = a.plot(x, y, marker="o", ms=2, label=label.removeprefix(ku + "_"))
+            if "eval/R_hat_sem" in c:
+                e = c["eval/R_hat_sem"][ok]
+                a.fill_between(x, y - e, y + e, color=line.get_color(), alpha=0.2, lw=0)
+            out[label] = float(y[-1])
+        a.set_xlabel("training episodes (of $2\\times10^4$ frames)")
         a.set_ylabel(r"held-out $\hat R$")
-        a.set_title(ku, fontsize=9)
+        kv = _ku_value(ku)
+        a.set_title(f"Ku = {kv:g}" if math.isfinite(kv) else ku, fontsize=9)
         a.legend(fontsize=7)
     fig.suptitle(title, fontsize=8)
     fig.tight_layout()

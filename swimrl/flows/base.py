@@ -110,7 +110,7 @@ class GriddedFlow:
         if flows is None:
             flows = torch.arange(self.n_flows, device=self.device)
         r = self.rows(torch.as_tensor(flows, device=self.device).reshape(-1))
-        basis = self.basis[r][:, ::stride, ::stride]
+        basis = self.basis[:, ::stride, ::stride].index_select(0, r)
         return torch.einsum("fm,fyxmc->fyxc", self.coeffs[r], basis)
 
     def measured_stats(self) -> dict[str, float]:

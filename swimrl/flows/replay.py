@@ -37,7 +37,7 @@ from typing import Protocol
 
 import torch
 
-from swimrl.flows.base import GriddedFlow
+from swimrl.flows.base import GriddedFlow, gradient_norm2
 from swimrl.flows.grid import PeriodicGrid
 
 
@@ -204,10 +204,12 @@ class ReplayFlow(GriddedFlow):
     def _load(self, rows: torch.Tensor, first: torch.Tensor) -> None:
         """Make snapshots ``first .. first + M - 1`` the window of each row in ``rows``
         (snapshot ``j`` in ring slot ``j mod M``; only those not already held are written)."""
-        m = self.n_basis
+        m, end = self.n_basis, self.source.n_times
         for r, j0 in zip(rows.tolist(), first.tolist(), strict=True):
             run = int(self.row_run[r])
-            for j in range(j0, j0 + m):
+            # at the end of a run the window may reach past its last snapshot; the slot
+            # left stale holds an index <= j0 - 1, whose weight is 0 from s >= j0 on
+            for j in range(j0, j0 + m if end is None else min(j0 + m, end)):
                 slot = j % m
                 if int(self.held[r, slot]) != j:
                     self.basis[r, :, :, slot] = self.snapshot(run, j)
@@ -241,6 +243,17 @@ class ReplayFlow(GriddedFlow):
         self.time += n_steps * dt
         self.coeffs.copy_(path[-1])
         return path
+
+    def measured_stats(self) -> dict[str, float]:
+        """Grid averages over all flows (each row weighted by the flows that share it):
+        ``u_rms = <u.u>^{1/2}``, ``tau_K = <A_ij A_ij>^{-1/2}``."""
+        rows, count = torch.unique(self.row[self.row >= 0], return_counts=True)
+        q = torch.einsum("fm,fyxmc->fyxc", self.coeffs[rows.to(self.device)],
+                         self.basis[rows.to(self.device)]).double()
+        w = count.to(q.device, torch.float64) / count.sum()
+        u2 = (w * (q[..., 0] ** 2 + q[..., 1] ** 2).mean((1, 2))).sum().item()
+        a2 = (w * gradient_norm2(q).mean((1, 2))).sum().item()
+        return {"u_rms": u2**0.5, "tau_K": a2**-0.5}
 
     def advance(self, dt: float) -> None:
         """Advance all flows by ``dt`` (one-step coefficient path)."""

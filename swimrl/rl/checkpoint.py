@@ -41,7 +41,8 @@ LEGACY_KEYS = {
     "flow.snapshot_tau_k": "flow.interval_tau_k",
 }
 #: Keys added later, with the value that reproduces what the code did before they existed
-#: (stochastic flow: the readings of the paper's specification, conf/flow/stochastic.yaml).
+#: (stochastic flow: the readings of the paper's specification, conf/flow/stochastic.yaml;
+#: replay: decoding on the run's grid, one start per flow).
 ADDED_KEYS = {
     "stochastic": {
         "flow.amplitudes": "stationary",
@@ -49,6 +50,7 @@ ADDED_KEYS = {
         "flow.basis_seed": 0,
         "flow.velocity_scale": "total",
     },
+    "dns_replay": {"flow.decode_n": None, "flow.flows_per_start": 1},
 }
 
 
