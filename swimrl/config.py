@@ -272,7 +272,18 @@ def train_config(cfg: DictConfig) -> TrainConfig:
         ),
         resume=cfg.resume,
         overwrite=cfg.overwrite,
+        eval_flow=eval_flow_spec(cfg),
     )
+
+
+def eval_flow_spec(cfg: DictConfig) -> FlowSpec | None:
+    """``eval_flow.*``: the training flow with these keys replaced (None if there are none)."""
+    extra = cfg.get("eval_flow")
+    if not extra:
+        return None
+    for key in extra:
+        one_of("eval_flow key", str(key), tuple(str(k) for k in cfg.flow if k != "name"))
+    return flow_spec(OmegaConf.merge(cfg.flow, extra), runtime(cfg))
 
 
 def dns_run(cfg: DictConfig) -> DNSRun:

@@ -364,28 +364,37 @@ def test_bigbatch_preset_extends_default():
 
 
 def test_training_in_a_stored_dns_run(compose_cfg, tmp_path):
-    """``swimrl-train flow=dns_replay``: PPO on a (tiny) stored DNS run, swimmers in its units."""
+    """``swimrl-train flow=dns_replay``: PPO on a (tiny) stored DNS run, swimmers in its units,
+    flows sharing starts; evaluated on another run that training never saw (``eval_flow``)."""
     from hydra import compose, initialize_config_module
 
     from swimrl.config import dns_run
     from swimrl.flows.dns.run import run_dns
     from swimrl.flows.sources import DNSStore
 
-    store = tmp_path / "run.zarr"
-    with initialize_config_module("swimrl.conf", version_base="1.3"):
-        dns_cfg = compose(config_name="dns", overrides=[
-            "dns.n=32", "dns.nu=5e-3", "dns.dt=4e-3", "spinup.time=0.2",
-            "spinup.measure_time=0.1", "store.n_times=40", "store.diag_every=5",
-            "progress=false", "threads=1", f"store.path={store}"])
-    run_dns(dns_run(dns_cfg))
-    s = DNSStore(store)
+    stores = {seed: tmp_path / f"run{seed}.zarr" for seed in (0, 1)}
+    for seed, store in stores.items():
+        with initialize_config_module("swimrl.conf", version_base="1.3"):
+            dns_cfg = compose(config_name="dns", overrides=[
+                "dns.n=32", "dns.nu=5e-3", "dns.dt=4e-3", "spinup.time=0.2",
+                "spinup.measure_time=0.1", "store.n_times=40", "store.diag_every=5",
+                "progress=false", "threads=1", f"seed={seed}", f"store.path={store}"])
+        run_dns(dns_run(dns_cfg))
+    s = DNSStore(stores[0])
     tiny = [o for o in TINY if not o.startswith("flow.")]
-    cfg = compose_cfg(tiny + ["flow=dns_replay", f"flow.path={store}", "train.eval_every=0"],
+    cfg = compose_cfg(tiny + ["flow=dns_replay", f"flow.path={stores[0]}", "train.eval_every=0",
+                              "flow.flows_per_start=2", f"+eval_flow.path=[{stores[1]}]"],
                       name="train")
+    tc = train_config(cfg)
+    assert tc.evaluation.flow.paths == (stores[0],) and tc.held_out.flow.paths == (stores[1],)
     metrics = train(cfg, tmp_path / "run")
     assert math.isfinite(metrics["R_hat_mean"]) and metrics["training"]["frames"] == 320
     assert metrics["flow_stats"]["u_rms"] > 0 and s.n_times == 40
     assert metrics["config"]["flow"]["name"] == "dns_replay"
+    assert metrics["flow_store"]["path"] == str(stores[1].resolve())  # the held-out run
+    with pytest.raises(ConfigError, match="eval_flow key"):
+        train_config(compose_cfg(tiny + ["flow=dns_replay", f"flow.path={stores[0]}",
+                                         "+eval_flow.bogus=1"], name="train"))
 
 
 def test_resume_a_checkpoint_written_before_the_key_renames(compose_cfg, tmp_path):

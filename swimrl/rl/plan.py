@@ -23,13 +23,14 @@ reported ``R_hat`` is measured on held-out flow realisations.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
 from swimrl.env import EnvParams
 from swimrl.errors import as_bool, as_float, as_int, one_of, require
 from swimrl.evaluation.rollout import EvalSetup
+from swimrl.flows.build import FlowSpec
 from swimrl.policies.networks import ModelSpec
 from swimrl.runtime import Runtime
 
@@ -156,6 +157,15 @@ class TrainConfig:
     model: ModelSpec
     resume: bool = False
     overwrite: bool = False
+    eval_flow: FlowSpec | None = None  # None: the training flow
+
+    @property
+    def held_out(self) -> EvalSetup:
+        """The evaluations' setup: :attr:`evaluation` with the flow of ``eval_flow`` (held-out
+        runs, ``eval_flow.*``) where one is given."""
+        if self.eval_flow is None:
+            return self.evaluation
+        return replace(self.evaluation, flow=self.eval_flow)
 
     def __post_init__(self) -> None:
         as_bool("resume", self.resume)

@@ -51,7 +51,7 @@ RESUME_FREE_KEYS = {
     "train.eval_flows",
     "train.eval_swimmers",
 }
-RESUME_FREE_PREFIXES = ("eval.", "hydra.")
+RESUME_FREE_PREFIXES = ("eval.", "eval_flow.", "hydra.")
 
 
 def config_differences(old: dict, new: dict) -> list[str]:
@@ -162,7 +162,7 @@ def train(cfg: TrainConfig, out: Path) -> dict | None:
             )
             return None
         trainer.save_policy()
-        metrics = trainer.evaluate(cfg.evaluation)
+        metrics = trainer.evaluate(cfg.held_out)
     finally:
         trainer.close()
     metrics["policy"] = str(out)
@@ -192,7 +192,7 @@ def compare_with_baselines(cfg: TrainConfig, out: Path, seed: int) -> dict:
     settings = {"strategies": ["sto", "naive", "policy"], "naive_shape_factors": [0.98],
                 "policies": [str(out)], "minimal": {"c1": 1.0, "c2": 0.0, "c3": 0.0, "c4": 0.0}}
     record = {**cfg.record, "seed": int(seed), "compare": settings}
-    setup = replace(cfg.evaluation, seed=int(seed), record=record)
+    setup = replace(cfg.held_out, seed=int(seed), record=record)
     variants = strategy_variants(settings["strategies"], settings["naive_shape_factors"],
                                  tuple(settings["minimal"].values()), settings["policies"])
     result = compare(CompareConfig(setup, variants))

@@ -140,7 +140,7 @@ class PPOTrainer:
         periodic evaluation's ``train.eval_flows x train.eval_swimmers``."""
         if setup is None:
             t = self.cfg.train
-            setup = self.cfg.evaluation.resized(t.eval_flows, t.eval_swimmers)
+            setup = self.cfg.held_out.resized(t.eval_flows, t.eval_swimmers)
         return evaluate(replace(setup, seed=self.plan.eval_seed), self.policy, "policy")
 
     def _periodic_eval(self) -> None:
