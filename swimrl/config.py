@@ -34,6 +34,7 @@ from swimrl.flows.build import (
 )
 from swimrl.flows.dns.params import DNSParams
 from swimrl.flows.dns.run import DNSRun
+from swimrl.flows.stochastic import kubo_label
 from swimrl.policies.baselines import StrategySpec
 from swimrl.policies.networks import ModelSpec
 from swimrl.rl.plan import LossSettings, OptimSettings, TrainConfig, TrainSettings
@@ -46,6 +47,8 @@ def flow_tag(flow: DictConfig) -> str:
 
 
 OmegaConf.register_new_resolver("flow_tag", flow_tag, replace=True)
+#: ``${ku:${flow.kubo}}`` -> ``0.1``, ``1``, ``10``, ``1e7`` (names of policies and records per Ku)
+OmegaConf.register_new_resolver("ku", kubo_label, replace=True)
 
 
 def _int(value):

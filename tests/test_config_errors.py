@@ -117,3 +117,13 @@ def test_cli_bad_value_is_one_line_with_exit_code_2(tmp_path):
     full = subprocess.run(cmd, capture_output=True, text=True,
                           env={**os.environ, "HYDRA_FULL_ERROR": "1"})
     assert full.returncode != 0 and "Traceback" in full.stderr and "flow.kubo" in full.stderr
+
+
+@pytest.mark.parametrize("kubo, label", [("0.1", "0.1"), ("1", "1"), ("10", "10"),
+                                         ("1e7", "1e7"), ("1e-3", "0.001"), ("2.5e12", "2.5e12")])
+def test_ku_resolver_names_records_per_kubo(compose_cfg, kubo, label):
+    """``${ku:${flow.kubo}}`` gives the Ku part of the shipped policies' and records' names,
+    so one multirun over Ku can pick each Ku's policy."""
+    cfg = compose_cfg([f"flow.kubo={kubo}",
+                       "compare.policies=['pretrained/ku${ku:${flow.kubo}}']"], name="compare")
+    assert cfg.compare.policies == [f"pretrained/ku{label}"]

@@ -27,6 +27,7 @@ from swimrl.env import EnvParams, SwimmerEnv
 from swimrl.evaluation.rollout import EvalSetup, EvalSizes, chunk_seed, evaluate_shared
 from swimrl.evaluation.trajectories import TrajectoryRecorder
 from swimrl.flows.build import StochasticSpec
+from swimrl.flows.stochastic import kubo_label
 from swimrl.policies.baselines import StrategySpec
 from swimrl.policies.files import load_policy, resolve_policy_file
 from swimrl.runtime import Runtime
@@ -49,7 +50,7 @@ LABEL = {"n_r": r"$n_r$", "n_theta": r"$n_\theta$", "S_nn": r"$S_{nn}\tau_K$",
 
 def ku_name(kubo: float) -> str:
     """``ku0.1``, ``ku1``, ``ku10``, ``ku1e7``: the shipped policies' names."""
-    return "ku" + (f"{kubo:g}".replace("e+0", "e").replace("e+", "e"))
+    return "ku" + kubo_label(kubo)
 
 
 @dataclass(frozen=True)
