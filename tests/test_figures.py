@@ -3,6 +3,7 @@ tiny record, and the cached evaluation records."""
 
 from __future__ import annotations
 
+import json
 import math
 from pathlib import Path
 
@@ -116,3 +117,30 @@ def test_videos_on_a_tiny_record(tmp_path):
                                                                   axis=-1).mean(1))
     traj = video_trajectories(rec, 10.0, tmp_path / "t.mp4", fps=2)
     assert traj["frames"] == 3 and traj["extent"][0] <= rec["traj_abs"][..., 0].min()
+
+
+def test_minimal_model_figure_reads_fits_and_draws_both_panels(tmp_path):
+    """ablation (b), (c): fits read per Ku, the minimal model named by its coefficients (an
+    actor the evaluation understands), the figure's returned data."""
+    for kubo, c1 in ((0.1, 1.5), (1e7, 0.4)):
+        d = tmp_path / "fits" / f"ku{kubo:g}"
+        d.mkdir(parents=True)
+        (d / "fit.json").write_text(json.dumps({
+            "coefficients": {"c1": c1, "c2": 0.2, "c3": 0.1, "c4": -0.05},
+            "stderr": dict.fromkeys(("c1", "c2", "c3", "c4"), 0.01),
+            "config": {"flow": {"kubo": kubo}, "eval": {"n_flows": 8}}}))
+    fits = figures.read_fits(tmp_path / "fits")
+    assert list(fits) == [0.1, 1e7]
+    name = figures.minimal_name(fits[1e7])
+    assert name == "minimal(0.4,0.2,0.1,-0.05)"
+    spec = figures._actor(name, None)
+    assert spec.name == "minimal" and spec.coeffs == (0.4, 0.2, 0.1, -0.05)
+    kus = np.array(list(fits))
+    r = {"smart": np.array([0.9, 0.7]), "minimal": np.array([0.88, 0.6]),
+         "STO": np.array([0.93, 0.48])}
+    coeffs = {k: np.array([f["coefficients"][k] for f in fits.values()])
+              for k in ("c1", "c2", "c3", "c4")}
+    out = figures.fig_minimal_model(kus, r, {k: 0 * v for k, v in r.items()}, coeffs,
+                                    {k: 0 * v for k, v in coeffs.items()}, tmp_path / "m.png")
+    assert out["kubo"] == [0.1, 1e7] and out["c1"] == [1.5, 0.4] and out["minimal"][1] == 0.6
+    assert (tmp_path / "m.png").stat().st_size > 1000

@@ -58,3 +58,7 @@ def test_cli_fits_a_strategy(tmp_path):
     c = rec["coefficients"]
     assert [c["c1"], c["c2"], c["c3"], c["c4"]] == pytest.approx([1.5, 0.5, -0.5, 0.8], abs=1e-3)
     assert rec["evaluate_with"].startswith("swimrl-eval strategy=minimal strategy.c1=1.5")
+    # each flow alone recovers them too (noise-free samples), so their spread is ~0
+    for k, want in zip(("c1", "c2", "c3", "c4"), (1.5, 0.5, -0.5, 0.8), strict=True):
+        assert rec["per_flow"][k] == pytest.approx([want, want], abs=1e-3)
+        assert 0 <= rec["flow_sem"][k] < 1e-3

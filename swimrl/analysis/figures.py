@@ -85,6 +85,8 @@ class FiguresConfig:
     """``comparison.json`` records of smartPerformance(a)."""
     curves: Path = Path("docs/results/long_runs")
     """Searched for ``curves.csv`` (trainingCurves)."""
+    fits: Path = Path("docs/results/minimal_fits")
+    """``ku*/fit.json`` of ``swimrl-fit-minimal`` at each Ku (ablation (b), (c))."""
     progress: bool = True
 
 
@@ -135,6 +137,8 @@ def _actor(name: str, params: EnvParams):
         return StrategySpec("sto")
     if name.startswith("naive("):
         return StrategySpec("naive", shape_factor=float(name[6:-1]))
+    if name.startswith("minimal("):
+        return StrategySpec("minimal", coeffs=tuple(float(c) for c in name[8:-1].split(",")))
     return load_policy(name, params)
 
 
@@ -641,6 +645,89 @@ def build_videos(cfg: FiguresConfig) -> dict:
     return out
 
 
+# -- Fig. ablation (b), (c): the minimal model across Ku ----------------------------------------
+def read_fits(root: Path) -> dict[float, dict]:
+    """``fit.json`` of ``swimrl-fit-minimal`` under ``root/ku*/``, keyed by Ku."""
+    fits = {}
+    for path in sorted(Path(root).glob("ku*/fit.json")):
+        rec = json.loads(path.read_text())
+        fits[float(rec["config"]["flow"]["kubo"])] = rec
+    return dict(sorted(fits.items()))
+
+
+def minimal_name(fit: dict) -> str:
+    """Actor name of the minimal model with a fit's coefficients."""
+    c = fit["coefficients"]
+    return "minimal(" + ",".join(f"{c[k]:.6g}" for k in ("c1", "c2", "c3", "c4")) + ")"
+
+
+def fig_minimal_model(kus: np.ndarray, r: dict[str, np.ndarray], err: dict[str, np.ndarray],
+                      coeffs: dict[str, np.ndarray], coeff_err: dict[str, np.ndarray],
+                      path: Path, title: str = "") -> dict:
+    """(b) R_hat of smart, the minimal model (fitted at each Ku) and STO against Ku; (c) the
+    fitted c1..c4 against Ku with their uncertainties."""
+    plt = _plt()
+    fig, (b, c) = plt.subplots(1, 2, figsize=(9.5, 3.9))
+    colors = {**COLORS, "minimal": "tab:purple"}
+    for name, y in r.items():
+        b.errorbar(kus, y, yerr=err[name], color=colors[name], marker="o", capsize=3, label=name,
+                   ls="--" if name == "minimal" else "-")
+    b.set_xscale("log")
+    b.set_xlabel("Ku")
+    b.set_ylabel(r"$\hat R$")
+    b.set_title("(b) smart and the minimal model", fontsize=9)
+    b.legend(fontsize=7)
+    shades = dict(zip(("c1", "c2", "c3", "c4"),
+                      ("tab:blue", "tab:red", "tab:brown", "tab:pink"), strict=True))
+    for k, y in coeffs.items():
+        c.errorbar(kus, y, yerr=coeff_err[k], marker="o", capsize=3, label=f"$c_{k[1]}$",
+                   color=shades[k])
+    c.axhline(0, color="0.6", lw=0.8)
+    c.set_xscale("log")
+    c.set_xlabel("Ku")
+    c.set_ylabel("fitted coefficient")
+    c.set_title("(c) minimal-model coefficients", fontsize=9)
+    c.legend(fontsize=7)
+    fig.suptitle(title, fontsize=8)
+    fig.tight_layout()
+    _save(fig, path)
+    return {"kubo": kus.tolist(), **{k: np.asarray(v).tolist() for k, v in r.items()},
+            **{k: np.asarray(v).tolist() for k, v in coeffs.items()}}
+
+
+def build_ablation(cfg: FiguresConfig) -> dict:
+    """Fig. ablation (b), (c) from the committed fits; (a), the signal-set training
+    multirun, is not built yet."""
+    fits = read_fits(cfg.fits)
+    if not fits:
+        return {"pending": f"no ku*/fit.json under {cfg.fits}"}
+    kus = np.array(list(fits))
+    names = ("smart", "minimal", "STO")
+    per = []
+    for kubo, fit in fits.items():
+        setup = _setup(cfg, kubo, cfg.robust_flows, cfg.robust_swimmers)
+        actors = [_policy(cfg, kubo), minimal_name(fit), "sto"]
+        rec = cached(cfg, f"minimal_ku{kubo:g}", _inputs(cfg, setup, actors),
+                     lambda s=setup, a=actors: {"per_flow": np.asarray(
+                         [m["per_flow"] for m in _shared(s, a)])})
+        per.append(rec["per_flow"])
+    per = np.stack(per)  # (Ku, 3, F)
+    r = {n: per[:, j].mean(-1) for j, n in enumerate(names)}
+    err = {n: per[:, j].std(-1, ddof=1) if per.shape[-1] > 1 else 0 * per[:, j, 0]
+           for j, n in enumerate(names)}
+    keys = ("c1", "c2", "c3", "c4")
+    coeffs = {k: np.array([f["coefficients"][k] for f in fits.values()]) for k in keys}
+    coeff_err = {k: np.array([f.get("flow_sem", f["stderr"])[k] for f in fits.values()])
+                 for k in keys}
+    n_fit = {f["config"]["eval"]["n_flows"] for f in fits.values()}
+    return fig_minimal_model(
+        kus, r, err, coeffs, coeff_err, cfg.out / "ablation.png",
+        f"(b) shipped smart policies; the minimal model with the coefficients fitted to them at "
+        f"each Ku; STO; {cfg.robust_flows} flows x {cfg.robust_swimmers} swimmers, bars: std "
+        f"over flows\n(c) fits on {'/'.join(map(str, sorted(n_fit)))} flows x 100 swimmers, "
+        "bars: SEM over flows; (a) signal ablation: not built")
+
+
 #: Figure name -> builder, in build order.
 BUILDERS: dict[str, Callable[[FiguresConfig], dict]] = {
     "swimmer": build_swimmer,
@@ -649,6 +736,7 @@ BUILDERS: dict[str, Callable[[FiguresConfig], dict]] = {
     "kuInf": build_ku_inf,
     "ku_pattern": build_ku_pattern,
     "trainingCurves": build_training_curves,
+    "ablation": build_ablation,
     "robustness-noise": build_robustness_noise,
     "robustness": build_robustness,
     "videos": build_videos,

@@ -8,8 +8,10 @@ of every swimmer are recorded. SciPy's ``curve_fit`` then solves the least-squar
 - c2 H(n_r) omega tau_K sgn S_np + c3 n_r - c4 tanh(S_nn tau_K))]^2``
 
 (paper Sec. "From learned smart strategies to a minimal analytical model"). The run directory
-gets ``fit.json`` with ``c1..c4``, their standard errors, the coefficient of determination
-``R^2`` and the command that evaluates the fitted model:
+gets ``fit.json`` with ``c1..c4``, their least-squares standard errors (too small: samples
+along a trajectory are correlated), the fits on each flow alone and their standard error over
+flows (``flow_sem``, the uncertainty to quote), the coefficient of determination ``R^2`` and
+the command that evaluates the fitted model:
 
     swimrl-fit-minimal strategy=policy policy=pretrained/ku10 flow.kubo=10
 """
@@ -39,8 +41,10 @@ class FitConfig:
         as_int("fit.sample_every", self.sample_every)
 
 
-def sample_strategy(env, actor, sample_every: int) -> tuple[np.ndarray, np.ndarray]:
-    """Signals ``(K, 5)`` and actions ``(K,)`` seen along one episode of every swimmer."""
+def sample_strategy(env, actor, sample_every: int,
+                    with_flows: bool = False) -> tuple[np.ndarray, ...]:
+    """Signals ``(K, 5)`` and actions ``(K,)`` seen along one episode of every swimmer (and,
+    with ``with_flows``, the flow of each sample ``(K,)``)."""
     sig, act = [], []
 
     def record(i: int, td) -> None:
@@ -49,7 +53,12 @@ def sample_strategy(env, actor, sample_every: int) -> tuple[np.ndarray, np.ndarr
             act.append(td.get("action").reshape(-1).double().cpu())
 
     run_episodes(env, actor, on_decision=record)
-    return torch.cat(sig).numpy(), torch.cat(act).numpy()
+    out = (torch.cat(sig).numpy(), torch.cat(act).numpy())
+    if with_flows:
+        f, s = env.batch_size
+        flows = np.tile(np.repeat(np.arange(f), s), len(sig))
+        out = (*out, flows)
+    return out
 
 
 def fit_minimal(signals: np.ndarray, actions: np.ndarray, lam_max: float, p0=(1.0, 0, 0, 0)):
@@ -75,15 +84,25 @@ def run_fit(cfg: FitConfig) -> dict:
                            sizes.n_swimmers, chunk_seed(setup.seed, 0))
     if not isinstance(actor, torch.nn.Module):
         actor = build_strategy(actor, env.action_spec_unbatched)
-    signals, actions = sample_strategy(env, actor.to(setup.runtime.device), cfg.sample_every)
-    coeffs, err, r2 = fit_minimal(signals, actions, env.params.shape_factor_max)
+    signals, actions, flows = sample_strategy(env, actor.to(setup.runtime.device),
+                                              cfg.sample_every, with_flows=True)
+    lam_max = env.params.shape_factor_max
+    coeffs, err, r2 = fit_minimal(signals, actions, lam_max)
     names = ("c1", "c2", "c3", "c4")
     c = {k: float(v) for k, v in zip(names, coeffs, strict=True)}
+    # samples along one trajectory are correlated, so curve_fit's standard errors are too
+    # small; the spread of fits on independent flows is the honest uncertainty
+    per_flow = np.array([fit_minimal(signals[flows == f], actions[flows == f], lam_max,
+                                     p0=coeffs)[0] for f in range(sizes.n_flows)])
+    spread = per_flow.std(axis=0, ddof=1) if sizes.n_flows > 1 else np.full(4, np.nan)
     flow = setup.record["flow"]
     knob = f"flow.kubo={flow['kubo']:g}" if flow["name"] == "stochastic" else f"flow={flow['name']}"
     return {
         "coefficients": c,
         "stderr": {k: float(v) for k, v in zip(names, err, strict=True)},
+        "per_flow": {k: per_flow[:, i].tolist() for i, k in enumerate(names)},
+        "flow_sem": {k: float(v / np.sqrt(sizes.n_flows)) for k, v in zip(names, spread,
+                                                                             strict=True)},
         "r2": r2,
         "n_samples": int(actions.size),
         "evaluate_with": "swimrl-eval strategy=minimal "
