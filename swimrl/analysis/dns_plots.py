@@ -10,6 +10,17 @@
 * ``dns_vorticity.png``: the vorticity of the first stored snapshot (paper Fig. 6a);
 
 and prints a JSON summary (slope, moments, ``u_rms``, ``tau_K``, resolution ``k_max l_nu``).
+
+With several stores (independent realisations, e.g. ``swimrl-dns -m seed=...``),
+``swimrl-dns-plots A.zarr B.zarr ... --out DIR`` writes each store's figures to
+``<store>_plots/`` and, into ``DIR``, the checks across them (:func:`check_stores`):
+
+* ``dns_stability.png``: ``u_rms(t) = (2E)^{1/2}`` and ``tau_K(t) = (2Z)^{-1/2}`` over the
+  stored window of each run (from its diagnostics), divided by the run's stored values;
+* ``dns_pdfs_all.png``: the PDFs of ``omega``, ``S_xx``, ``S_xy`` pooled over all runs;
+* ``dns_checks.json``: per run the spectral slope, ``u_rms``, ``tau_K``, their relative
+  spread and drift (second half of the window against the first) and ``k_max l_nu``, and
+  whether every run has ``k_max l_nu >= 1``.
 """
 
 from __future__ import annotations
@@ -205,3 +216,70 @@ def make_plots(path: str | Path, out_dir: str | Path = "docs/img", n_snapshots: 
             * eta ** (-1 / 6), "moments": stats, "snapshots_used": len(idx),
         "store_bytes": size,
     }
+
+
+def stored_window_series(path: Path, store: DNSStore) -> dict[str, np.ndarray]:
+    """``t / tau_K`` from the first stored snapshot, ``u_rms(t) = (2E)^{1/2}`` and
+    ``tau_K(t) = (2Z)^{-1/2}`` (2D: ``<A_ij A_ij> = <omega^2> = 2Z``) over the stored
+    window, from the run's diagnostics."""
+    d = zarr.open_group(str(path), mode="r")["diagnostics"]
+    n = int(store.attrs.get("n_diag", d["t"].shape[0]))
+    t = np.asarray(d["t"][:n])
+    t0 = float(store.attrs.get("t_first", t[0] if n else 0.0))
+    keep = t >= t0
+    e, z = np.asarray(d["energy"][:n])[keep], np.asarray(d["enstrophy"][:n])[keep]
+    return {"t": (t[keep] - t0) / store.tau_k, "u_rms": np.sqrt(2 * e), "tau_k": (2 * z) ** -0.5}
+
+
+def _spread(x: np.ndarray) -> dict[str, float]:
+    """Relative std and drift (mean of the second half / mean of the first half - 1)."""
+    half = len(x) // 2
+    return {"rel_std": float(x.std() / x.mean()),
+            "drift": float(x[half:].mean() / x[:half].mean() - 1) if half else math.nan}
+
+
+def check_stores(paths: list[Path], out_dir: Path, n_snapshots: int = 50,
+                 fit: tuple[float, float] = (6.0, 40.0)) -> dict:
+    """Each store's summary (:func:`make_plots` into ``<store>_plots``), the stability of
+    ``u_rms`` and ``tau_K`` through each stored window and the PDFs pooled over all runs
+    into ``out_dir``; returns (and writes ``dns_checks.json``) the checks."""
+    import json
+
+    out_dir = Path(out_dir)
+    out_dir.mkdir(parents=True, exist_ok=True)
+    runs, pooled = [], {k: [] for k in PDF_CHANNELS}
+    fig, axs = plt.subplots(1, 2, figsize=(10, 3.6))
+    for path in map(Path, paths):
+        summary = make_plots(path, str(path.with_suffix("")) + "_plots", n_snapshots, fit)
+        store = DNSStore(path)
+        series = stored_window_series(path, store)
+        label = f"seed {store.attrs.get('seed', '?')}"
+        axs[0].plot(series["t"], series["u_rms"] / store.u_rms, lw=0.8, label=label)
+        axs[1].plot(series["t"], series["tau_k"] / store.tau_k, lw=0.8, label=label)
+        idx = np.unique(np.linspace(0, store.n_times - 1, min(n_snapshots, store.n_times))
+                        .round().astype(int))
+        for k, v in gradient_samples(store, idx).items():
+            pooled[k].append(v / v.std())  # each run in its own units
+        runs.append({**{k: summary[k] for k in ("store", "n", "n_times", "u_rms", "tau_k",
+                                                 "spectrum_slope", "kmax_l_nu")},
+                     "seed": store.attrs.get("seed"),
+                     "stored_tau_k": float(series["t"][-1]) if len(series["t"]) else 0.0,
+                     "u_rms_t": _spread(series["u_rms"]), "tau_k_t": _spread(series["tau_k"])})
+    for ax, name in zip(axs, (r"$u_{\rm rms}(t)/u_{\rm rms}$", r"$\tau_K(t)/\tau_K$"),
+                        strict=True):
+        ax.axhline(1, color="k", lw=0.6)
+        ax.set_xlabel(r"$t/\tau_K$ (from the first stored snapshot)")
+        ax.set_ylabel(name)
+        ax.legend(frameon=False, fontsize=7)
+    fig.suptitle("stability of the stored runs (each divided by its stored value)", fontsize=9)
+    fig.tight_layout()
+    fig.savefig(out_dir / "dns_stability.png", dpi=130)
+    plt.close(fig)
+    moments = plot_pdfs({k: np.concatenate(v) for k, v in pooled.items()},
+                        out_dir / "dns_pdfs_all.png")
+    checks = {"runs": runs, "pooled_moments": moments,
+              "all_resolved": all(r["kmax_l_nu"] >= 1 for r in runs),
+              "u_rms_spread_over_runs": float(np.std([r["u_rms"] for r in runs])
+                                              / np.mean([r["u_rms"] for r in runs]))}
+    (out_dir / "dns_checks.json").write_text(json.dumps(checks, indent=1))
+    return checks

@@ -9,14 +9,16 @@ from pathlib import Path
 
 import torch
 
-from swimrl.analysis.dns_plots import make_plots
+from swimrl.analysis.dns_plots import check_stores, make_plots
 
 
 def main(argv: list[str] | None = None) -> dict:
-    """``swimrl-dns-plots <store> [--out DIR] [--snapshots M]``; by default the figures go
-    next to the store, into ``<store>_plots/`` (never into the repository's ``docs/``)."""
-    ap = argparse.ArgumentParser(description="Figures of a stored swimrl DNS run")
-    ap.add_argument("store")
+    """``swimrl-dns-plots <store> [<store> ...] [--out DIR] [--snapshots M]``; by default the
+    figures go next to the store, into ``<store>_plots/`` (never into the repository's
+    ``docs/``); with several stores also the checks across them into ``--out`` (default
+    ``dns_checks/`` next to the first store)."""
+    ap = argparse.ArgumentParser(description="Figures of stored swimrl DNS runs")
+    ap.add_argument("store", nargs="+")
     ap.add_argument("--out", default=None,
                     help="directory of the figures (default: <store>_plots next to the store)")
     ap.add_argument("--snapshots", type=int, default=50, help="snapshots averaged (evenly spaced)")
@@ -25,9 +27,15 @@ def main(argv: list[str] | None = None) -> dict:
     args = ap.parse_args(argv)
     if args.snapshots < 1:
         ap.error(f"--snapshots {args.snapshots}: allowed an integer >= 1")
-    out = args.out or str(Path(args.store).with_suffix("")) + "_plots"
     torch.set_num_threads(1)
-    summary = make_plots(args.store, out, args.snapshots, tuple(args.fit))
+    if len(args.store) > 1:
+        out = args.out or str(Path(args.store[0]).parent / "dns_checks")
+        summary = check_stores([Path(s) for s in args.store], Path(out), args.snapshots,
+                               tuple(args.fit))
+        print(json.dumps(summary, indent=1))
+        return summary
+    out = args.out or str(Path(args.store[0]).with_suffix("")) + "_plots"
+    summary = make_plots(args.store[0], out, args.snapshots, tuple(args.fit))
     print(json.dumps(summary, indent=1))
     return summary
 
