@@ -464,6 +464,14 @@ def build_ku_pattern(cfg: FiguresConfig) -> dict:
                           f"{_titles(cfg, cfg.n_flows, cfg.n_swimmers, cfg.params)}")
 
 
+def _shown(path: Path) -> str:
+    """``path`` relative to the working directory where it lies below it."""
+    try:
+        return str(Path(path).resolve().relative_to(Path.cwd()))
+    except ValueError:
+        return str(path)
+
+
 # -- Fig. trainingCurves ---------------------------------------------------------------------
 def find_curves(root: Path) -> dict[str, Path]:
     """``curves.csv`` files under ``root``, labelled by their run directory."""
@@ -521,7 +529,9 @@ def build_training_curves(cfg: FiguresConfig) -> dict:
     if not files:
         return {"pending": f"no curves.csv under {cfg.curves}"}
     return fig_training_curves({k: read_curves(p) for k, p in files.items()},
-                               cfg.out / "trainingCurves.png", f"curves.csv under {cfg.curves}")
+                               cfg.out / "trainingCurves.png",
+                               f"curves.csv under {_shown(cfg.curves)}; held-out: "
+                               "the same flows at every point, band: SEM over flows")
 
 
 # -- robustness ------------------------------------------------------------------------------
