@@ -92,6 +92,11 @@ def test_ppo_end_to_end(train_cfg, tmp_path, anneal):
         assert len(s[tag]) == 4 and all(math.isfinite(v) for _, v in s[tag]), tag
     assert [step for step, _ in s["train/loss_critic"]] == [80, 160, 240, 320]
     assert [step for step, _ in s["eval/R_hat"]] == [0, 160, 320]  # initial policy first
+    # each evaluated policy is kept (to choose one on a validation seed afterwards)
+    kept = sorted((tmp_path / "policies").glob("policy_*.pt"), key=lambda p: p.stat().st_mtime)
+    assert [p.name for p in kept] == ["policy_0.pt", "policy_160.pt", "policy_320.pt"]
+    last, final = load_file(kept[-1]), load_file(tmp_path / "policy.pt")
+    assert all(torch.equal(last["actor"][k], v) for k, v in final["actor"].items())
     # the committed-record form of the curves: one CSV row per logged step, same values
     import csv
 

@@ -68,7 +68,7 @@ def config_differences(old: dict, new: dict) -> list[str]:
 
 def clean_run_dir(out: Path) -> None:
     """Delete the outputs of a previous run in ``out`` (``overwrite=true``)."""
-    for name in ("checkpoints", "tb"):
+    for name in ("checkpoints", "tb", "policies"):
         if (out / name).is_dir():
             shutil.rmtree(out / name)
     for name in ("policy.pt", "metrics.json"):

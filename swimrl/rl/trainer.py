@@ -125,9 +125,10 @@ class PPOTrainer:
         self.counters = dict(ck["counters"])
         return ck
 
-    def save_policy(self) -> Path:
+    def save_policy(self, path: Path | None = None) -> Path:
+        """The deterministic policy as ``<run>/policy.pt`` (or ``path``)."""
         return save_policy(
-            policy_path(self.run_dir),
+            policy_path(self.run_dir) if path is None else path,
             actor=self.actor,
             counters=self.counters,
             config=self.config,
@@ -145,6 +146,9 @@ class PPOTrainer:
 
     def _periodic_eval(self) -> None:
         t0 = time.perf_counter()
+        # the policy evaluated, kept so that a policy can be chosen afterwards on flows of a
+        # separate validation seed (the periodic evaluation's flows are the final one's)
+        self.save_policy(self.run_dir / "policies" / f"policy_{self.counters['frames']}.pt")
         m = self.evaluate()
         self.last_eval = m
         step = self.counters["frames"]
