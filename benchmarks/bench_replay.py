@@ -31,6 +31,7 @@ import statistics
 import subprocess
 import sys
 import tempfile
+import time
 from pathlib import Path
 
 import numpy as np
@@ -123,18 +124,12 @@ def decode_errors(path: Path, grids: list[int], points: int = 2000) -> None:
         vs_full = np.sqrt(((got - full) ** 2).mean(0)) / rms
         t = []
         for rep in range(4):
-            t0 = _now()
+            t0 = time.perf_counter()
             src.channels(rep, rep + 1)
-            t.append(_now() - t0)
+            t.append(time.perf_counter() - t0)
         print(f"{n_d:>5} {src.cutoff:>6} | " + " ".join(f"{e:.1e}" for e in err)
               + " | " + " ".join(f"{e:.1e}" for e in vs_full)
               + f" | {1e3 * statistics.median(t[1:]):.1f}")
-
-
-def _now() -> float:
-    import time
-
-    return time.perf_counter()
 
 
 def run(cmd: list[str]) -> None:

@@ -242,7 +242,7 @@ def figures_config(cfg: DictConfig) -> FiguresConfig:
         policies=str(cfg.policies),
         results=Path(to_absolute_path(str(cfg.results))),
         curves=Path(to_absolute_path(str(cfg.curves))),
-        fits=Path(to_absolute_path(str(cfg.get("fits", "docs/results/minimal_fits")))),
+        fits=Path(to_absolute_path(str(cfg.fits))),
         progress=as_bool("progress", cfg.progress),
     )
 

@@ -193,6 +193,12 @@ def plot_vorticity(store: DNSStore, out: Path, index: int = 0) -> None:
 def make_plots(path: str | Path, out_dir: str | Path = "docs/img", n_snapshots: int = 50,
                fit: tuple[float, float] = (6.0, 40.0)) -> dict:
     """All figures for the store at ``path`` into ``out_dir``; returns the summary dict."""
+    return _plots_and_samples(path, out_dir, n_snapshots, fit)[0]
+
+
+def _plots_and_samples(path: str | Path, out_dir: str | Path, n_snapshots: int,
+                       fit: tuple[float, float]) -> tuple[dict, dict[str, np.ndarray]]:
+    """:func:`make_plots`, also returning the gradient samples its PDFs were drawn from."""
     path, out_dir = Path(path), Path(out_dir)
     out_dir.mkdir(parents=True, exist_ok=True)
     store = DNSStore(path)
@@ -203,7 +209,8 @@ def make_plots(path: str | Path, out_dir: str | Path = "docs/img", n_snapshots: 
                     .astype(int))
     spec = spectra(store, idx)
     slope = plot_spectrum(spec, params, out_dir / "dns_spectrum.png", fit)
-    stats = plot_pdfs(gradient_samples(store, idx), out_dir / "dns_pdfs.png")
+    samples = gradient_samples(store, idx)
+    stats = plot_pdfs(samples, out_dir / "dns_pdfs.png")
     plot_timeseries(path, store, out_dir / "dns_timeseries.png")
     plot_vorticity(store, out_dir / "dns_vorticity.png")
     eta = spec["D_Z"]
@@ -215,7 +222,7 @@ def make_plots(path: str | Path, out_dir: str | Path = "docs/img", n_snapshots: 
         "enstrophy_dissipation": eta, "kmax_l_nu": spec["k_max"] * math.sqrt(params.nu)
             * eta ** (-1 / 6), "moments": stats, "snapshots_used": len(idx),
         "store_bytes": size,
-    }
+    }, samples
 
 
 def stored_window_series(path: Path, store: DNSStore) -> dict[str, np.ndarray]:
@@ -250,15 +257,14 @@ def check_stores(paths: list[Path], out_dir: Path, n_snapshots: int = 50,
     runs, pooled = [], {k: [] for k in PDF_CHANNELS}
     fig, axs = plt.subplots(1, 2, figsize=(10, 3.6))
     for path in map(Path, paths):
-        summary = make_plots(path, str(path.with_suffix("")) + "_plots", n_snapshots, fit)
+        summary, samples = _plots_and_samples(path, str(path.with_suffix("")) + "_plots",
+                                              n_snapshots, fit)
         store = DNSStore(path)
         series = stored_window_series(path, store)
         label = f"seed {store.attrs.get('seed', '?')}"
         axs[0].plot(series["t"], series["u_rms"] / store.u_rms, lw=0.8, label=label)
         axs[1].plot(series["t"], series["tau_k"] / store.tau_k, lw=0.8, label=label)
-        idx = np.unique(np.linspace(0, store.n_times - 1, min(n_snapshots, store.n_times))
-                        .round().astype(int))
-        for k, v in gradient_samples(store, idx).items():
+        for k, v in samples.items():
             pooled[k].append(v / v.std())  # each run in its own units
         runs.append({**{k: summary[k] for k in ("store", "n", "n_times", "u_rms", "tau_k",
                                                  "spectrum_slope", "kmax_l_nu")},

@@ -588,23 +588,28 @@ def sweep_record(cfg: FiguresConfig, name: str, values: list[float], key: str,
     for v in values:
         setup = _setup(cfg, kubo, cfg.robust_flows, cfg.robust_swimmers, **{key: v})
         actors = [_policy(cfg, kubo), "naive", "sto"]
-        per = cached(cfg, f"{name}_{key}{v:g}", _inputs(cfg, setup, actors),
-                     lambda s=setup, a=actors: {"per_flow": np.asarray(
-                         [m["per_flow"] for m in _shared(s, a)])})
-        out.append(per["per_flow"])
+        out.append(per_flow_record(cfg, f"{name}_{key}{v:g}", setup, actors))
     return {"per_flow": np.stack(out)}
 
 
-def _shared(setup: EvalSetup, actors: list[str]) -> list[dict]:
-    setup = replace(setup, sizes=replace(setup.sizes, record=0))
-    return evaluate_shared(setup, [_actor(a, setup.params) for a in actors],
-                           desc="robustness")
+def per_flow_record(cfg: FiguresConfig, name: str, setup: EvalSetup,
+                    actors: list[str]) -> np.ndarray:
+    """Per-flow R_hat ``(len(actors), F)`` of ``actors`` on the shared flows of ``setup``
+    (cached under ``name``)."""
+    def compute() -> dict[str, np.ndarray]:
+        plain = replace(setup, sizes=replace(setup.sizes, record=0))
+        metrics = evaluate_shared(plain, [_actor(a, plain.params) for a in actors],
+                                  desc="robustness")
+        return {"per_flow": np.asarray([m["per_flow"] for m in metrics])}
+
+    return cached(cfg, name, _inputs(cfg, setup, actors), compute)["per_flow"]
 
 
-def _stats(per: np.ndarray) -> tuple[dict, dict]:
-    mean = {n: per[:, j].mean(-1) for j, n in enumerate(STRATEGIES)}
+def _stats(per: np.ndarray, names: tuple[str, ...] = STRATEGIES) -> tuple[dict, dict]:
+    """Mean and std over flows (last axis) of ``per`` ``(..., len(names), F)``, by name."""
+    mean = {n: per[:, j].mean(-1) for j, n in enumerate(names)}
     std = {n: per[:, j].std(-1, ddof=1) if per.shape[-1] > 1 else 0 * per[:, j, 0]
-           for j, n in enumerate(STRATEGIES)}
+           for j, n in enumerate(names)}
     return mean, std
 
 
@@ -717,14 +722,8 @@ def build_ablation(cfg: FiguresConfig) -> dict:
     for kubo, fit in fits.items():
         setup = _setup(cfg, kubo, cfg.robust_flows, cfg.robust_swimmers)
         actors = [_policy(cfg, kubo), minimal_name(fit), "sto"]
-        rec = cached(cfg, f"minimal_ku{kubo:g}", _inputs(cfg, setup, actors),
-                     lambda s=setup, a=actors: {"per_flow": np.asarray(
-                         [m["per_flow"] for m in _shared(s, a)])})
-        per.append(rec["per_flow"])
-    per = np.stack(per)  # (Ku, 3, F)
-    r = {n: per[:, j].mean(-1) for j, n in enumerate(names)}
-    err = {n: per[:, j].std(-1, ddof=1) if per.shape[-1] > 1 else 0 * per[:, j, 0]
-           for j, n in enumerate(names)}
+        per.append(per_flow_record(cfg, f"minimal_ku{kubo:g}", setup, actors))
+    r, err = _stats(np.stack(per), names)  # per: (Ku, 3, F)
     keys = ("c1", "c2", "c3", "c4")
     coeffs = {k: np.array([f["coefficients"][k] for f in fits.values()]) for k in keys}
     coeff_err = {k: np.array([f.get("flow_sem", f["stderr"])[k] for f in fits.values()])

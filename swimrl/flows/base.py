@@ -33,6 +33,18 @@ def gradient_norm2(q: torch.Tensor) -> torch.Tensor:
     return 2 * q[..., 2] ** 2 + 2 * q[..., 3] ** 2 + 0.5 * q[..., 4] ** 2
 
 
+def field_stats(q: torch.Tensor, weights: torch.Tensor | None = None) -> dict[str, float]:
+    """``u_rms = <u.u>^{1/2}`` and ``tau_K = <A_ij A_ij>^{-1/2}`` of node values ``q``
+    ``(R, n, n, 5)``: the mean over all nodes, or with ``weights`` ``(R,)`` the weighted mean
+    of the per-row means."""
+    u2, a2 = q[..., 0] ** 2 + q[..., 1] ** 2, gradient_norm2(q)
+    if weights is None:
+        return {"u_rms": u2.mean().item() ** 0.5, "tau_K": a2.mean().item() ** -0.5}
+    w = weights / weights.sum()
+    return {"u_rms": (w * u2.mean((1, 2))).sum().item() ** 0.5,
+            "tau_K": (w * a2.mean((1, 2))).sum().item() ** -0.5}
+
+
 class GriddedFlow:
     """Base class: ``n_flows`` independent realisations of ``q(x,t) = sum_m c_m(t) Q_m(x)``.
 
@@ -115,10 +127,7 @@ class GriddedFlow:
 
     def measured_stats(self) -> dict[str, float]:
         """Grid averages over all flows: ``u_rms = <u.u>^{1/2}``, ``tau_K = <A_ij A_ij>^{-1/2}``."""
-        q = self.grid_fields().double()
-        u2 = (q[..., 0] ** 2 + q[..., 1] ** 2).mean().item()
-        a2 = gradient_norm2(q).mean().item()
-        return {"u_rms": u2**0.5, "tau_K": a2**-0.5}
+        return field_stats(self.grid_fields().double())
 
 
 def sample_basis(

@@ -75,8 +75,8 @@ class StoredRunSpec:
 
     def __post_init__(self) -> None:
         require(len(self.paths) > 0, "flow.path", "[]", "a store path or a list of them")
-        if len(set(self.paths)) != len(self.paths):
-            require(False, "flow.path", [str(p) for p in self.paths], "distinct stores")
+        require(len(set(self.paths)) == len(self.paths), "flow.path",
+                [str(p) for p in self.paths], "distinct stores")
         for path in self.paths:
             status = store_status(path)
             require(status not in (None, "unknown"), "flow.path", str(path),

@@ -37,7 +37,7 @@ from typing import Protocol
 
 import torch
 
-from swimrl.flows.base import GriddedFlow, gradient_norm2
+from swimrl.flows.base import GriddedFlow, field_stats
 from swimrl.flows.grid import PeriodicGrid
 
 
@@ -112,9 +112,7 @@ class ReplayFlow(GriddedFlow):
         self.cache: OrderedDict[tuple[int, int], torch.Tensor] = OrderedDict()
         self.cache_size = window + 1 if cache_size is None else int(cache_size)
         self.decodes = 0  # snapshots decoded so far (benchmarks and tests)
-        # per flow: run, stored index of t = 0, basis row
-        self.run = torch.zeros(n_flows, dtype=torch.int64)
-        self.start = torch.zeros(n_flows, dtype=torch.int64)
+        # per flow: its basis row (its run and start are the row's)
         self.row = torch.full((n_flows,), -1, dtype=torch.int64)
         self._row_dev = self.row.to(self.device)
         # per row: run, start, time, stored index held in each ring slot (-1: none), in use
@@ -133,6 +131,16 @@ class ReplayFlow(GriddedFlow):
         return torch.randint(
             0, self.max_start + 1, (count,), generator=self.generator, device=self.device
         ).cpu()
+
+    @property
+    def run(self) -> torch.Tensor:
+        """Run replayed by each flow, ``(F,)``."""
+        return self.row_run[self.row]
+
+    @property
+    def start(self) -> torch.Tensor:
+        """Stored index of each flow's ``t = 0``, ``(F,)``."""
+        return self.row_start[self.row]
 
     def start_runs(self, count: int) -> torch.Tensor:
         """Run replayed by ``count`` new episodes: ``r ~ U{0..n_runs-1}`` (no draw for one run)."""
@@ -158,7 +166,6 @@ class ReplayFlow(GriddedFlow):
             if int(self.row_run[r]) != run:
                 self.held[r] = -1  # its ring holds another run's snapshots
             self.row[group] = r
-            self.run[group], self.start[group] = run, start
             self.row_run[r], self.row_start[r], self.row_time[r] = run, start, 0.0
             new_rows.append(r)
         self._row_dev = self.row.to(self.device)
@@ -248,12 +255,9 @@ class ReplayFlow(GriddedFlow):
         """Grid averages over all flows (each row weighted by the flows that share it):
         ``u_rms = <u.u>^{1/2}``, ``tau_K = <A_ij A_ij>^{-1/2}``."""
         rows, count = torch.unique(self.row[self.row >= 0], return_counts=True)
-        q = torch.einsum("fm,fyxmc->fyxc", self.coeffs[rows.to(self.device)],
-                         self.basis[rows.to(self.device)]).double()
-        w = count.to(q.device, torch.float64) / count.sum()
-        u2 = (w * (q[..., 0] ** 2 + q[..., 1] ** 2).mean((1, 2))).sum().item()
-        a2 = (w * gradient_norm2(q).mean((1, 2))).sum().item()
-        return {"u_rms": u2**0.5, "tau_K": a2**-0.5}
+        rows = rows.to(self.device)
+        q = torch.einsum("fm,fyxmc->fyxc", self.coeffs[rows], self.basis[rows])
+        return field_stats(q.double(), count.to(q.device, torch.float64))
 
     def advance(self, dt: float) -> None:
         """Advance all flows by ``dt`` (one-step coefficient path)."""

@@ -88,23 +88,21 @@ class DNSStore:
 
     def omega_hat(self, i0: int, i1: int, dtype: torch.dtype = torch.complex64) -> torch.Tensor:
         """Unnormalised ``rfft2(omega)`` of snapshots ``i0..i1-1``, ``(i1-i0, N, N//2+1)``."""
-        self._check_range(i0, i1)
-        c = torch.from_numpy(np.asarray(self.group["omega_hat"][i0:i1])).to(self.device)
+        c = self._stored(i0, i1)
         return unpack(c.to(dtype) * float(self.store_n) ** 2, self.store_n)
 
     def decoded_hat(self, i0: int, i1: int) -> torch.Tensor:
         """Unnormalised ``rfft2(omega)`` on the decode grid, ``(i1-i0, n_d, n_d//2+1)``:
         the stored ``c_k`` with ``|m_x|, |m_y| <= cutoff``, times ``n_d^2``."""
-        self._check_range(i0, i1)
-        c = torch.from_numpy(np.asarray(self.group["omega_hat"][i0:i1])).to(self.device)
+        c = self._stored(i0, i1)
         big, k = dealias_cutoff(self.store_n), self.cutoff
-        if k < big:
-            c = c[:, big - k: big + k + 1, : k + 1]
-        out = torch.zeros((i1 - i0, self.n, self.n // 2 + 1), dtype=torch.complex64,
-                          device=self.device)
-        iy = torch.remainder(torch.arange(-k, k + 1), self.n).to(self.device)
-        out[:, iy, : k + 1] = c.to(torch.complex64) * float(self.n) ** 2
-        return out
+        c = c[:, big - k: big + k + 1, : k + 1]
+        return unpack(c.to(torch.complex64) * float(self.n) ** 2, self.n, cutoff=k)
+
+    def _stored(self, i0: int, i1: int) -> torch.Tensor:
+        """The stored (packed, normalised) coefficients of snapshots ``i0..i1-1``."""
+        self._check_range(i0, i1)
+        return torch.from_numpy(np.asarray(self.group["omega_hat"][i0:i1])).to(self.device)
 
     def channels(self, i0: int, i1: int, run: int = 0) -> torch.Tensor:
         """``(u_x, u_y, S_xx, S_xy, omega)`` at the decode nodes, ``(i1-i0, n_d, n_d, 5)``

@@ -58,9 +58,10 @@ def pack(omega_hat: torch.Tensor, n: int) -> torch.Tensor:
     return omega_hat[..., iy, : K + 1]
 
 
-def unpack(packed: torch.Tensor, n: int) -> torch.Tensor:
-    """Inverse of :func:`pack`: zero-filled ``(..., N, N//2+1)``."""
-    K = dealias_cutoff(n)
+def unpack(packed: torch.Tensor, n: int, cutoff: int | None = None) -> torch.Tensor:
+    """Inverse of :func:`pack`: zero-filled ``(..., N, N//2+1)``; ``packed`` holds the modes
+    ``|m| <= cutoff`` (default: the 2/3 rule's ``K`` of ``n``)."""
+    K = dealias_cutoff(n) if cutoff is None else cutoff
     iy = torch.remainder(torch.arange(-K, K + 1), n).to(packed.device)
     out = torch.zeros((*packed.shape[:-2], n, n // 2 + 1), dtype=packed.dtype, device=packed.device)
     out[..., iy, : K + 1] = packed
