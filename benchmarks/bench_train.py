@@ -10,13 +10,17 @@ graph on the first one) of
 * the PPO update (GAE + ``epochs x minibatches`` gradient steps), seconds;
 * overall frames/s = ``frames_per_batch / (collect + update)``;
 * the update's breakdown from ``torch.profiler`` labels (``ppo/gae``, ``ppo/minibatch``,
-  ``ppo/loss_backward``, ``ppo/clip_optimizer``) over one profiled update.
+  ``ppo/loss_backward``, ``ppo/clip_optimizer``) over one profiled update;
+* the flow redraw at an episode's end (``flow.reset()`` of all training flows, median of
+  ``--redraws``), seconds, and the overall frames/s over a whole episode,
+  ``U fpb / (U (collect + update) + redraw)`` with ``U = N / L`` updates per episode
+  (a long run's rate; the few timed updates above never reach an episode's end).
 
 Variants (``--variants``, comma-separated):
 
-* ``before``: the update as it was before the compiled path: eager, and ``ClipPPOLoss``
+* ``before``: the code as it was before the compiled path: eager, ``ClipPPOLoss``
   computing the Monte-Carlo entropy of the ``TanhNormal`` although its coefficient is 0
-  (``entropy_bonus=True``);
+  (``entropy_bonus=True``), and the flow redraw through full-grid FFTs;
 * ``eager``: no entropy sample when the coefficient is 0, eager;
 * ``compiled``: the same with ``train.compile=true`` (what the presets use).
 
@@ -60,6 +64,7 @@ class Variant:
         self.trainer = PPOTrainer(cfg, plan, run_dir / name, device, dtype)
         if name == "before":
             self.trainer.loss.entropy_bonus = True
+            self.trainer.env.flow._synthesis = None  # full-grid FFT redraw
         self.collector = rlb.make_collector(
             self.trainer.env, self.trainer.actor, plan, 10**12, device
         )
@@ -78,6 +83,15 @@ class Variant:
             self.collect_s.append(t1 - t0)
             self.update_s.append(t2 - t1)
 
+    def redraw(self, repeats: int) -> float:
+        """Median seconds of one redraw of every training flow (an episode's end)."""
+        times = []
+        for _ in range(repeats):
+            t0 = time.perf_counter()
+            self.trainer.env.flow.reset()
+            times.append(time.perf_counter() - t0)
+        return statistics.median(times)
+
     def breakdown(self) -> dict[str, float]:
         """Seconds per label over one profiled update (profiler overhead included)."""
         data = next(self.batches)
@@ -94,6 +108,7 @@ def main() -> None:
     ap.add_argument("--variants", default="before,compiled")
     ap.add_argument("--updates", type=int, default=5)
     ap.add_argument("--warmup", type=int, default=2)
+    ap.add_argument("--redraws", type=int, default=2)
     ap.add_argument("--threads", type=int, default=1)
     ap.add_argument("--out", default="/tmp/swimrl_bench_train")
     ap.add_argument("overrides", nargs="*", help="extra config overrides")
@@ -109,19 +124,26 @@ def main() -> None:
     print(f"preset={args.preset} Ku={args.kubo} frames/update={fpb} threads={args.threads} "
           f"(median of {args.updates} updates, variants interleaved)")
     head = f"{'variant':<10}{'env frames/s':>14}{'collect s':>11}{'update s':>10}{'frames/s':>10}"
-    print(head + "".join(f"{k.split('/')[1]:>16}" for k in LABELS))
-    overall = {}
+    print(head + "".join(f"{k.split('/')[1]:>16}" for k in LABELS)
+          + f"{'redraw s':>10}{'episode frames/s':>18}")
+    plan = variants[0].plan
+    per_episode = plan.params.n_decisions / plan.rollout_steps  # updates per episode, U
+    overall, episode = {}, {}
     for v in variants:
         c, u = statistics.median(v.collect_s), statistics.median(v.update_s)
         overall[v.name] = fpb / (c + u)
         parts = v.breakdown()
+        r = v.redraw(args.redraws)
+        episode[v.name] = per_episode * fpb / (per_episode * (c + u) + r)
         print(
             f"{v.name:<10}{fpb / c:>14.0f}{c:>11.3f}{u:>10.3f}{overall[v.name]:>10.0f}"
             + "".join(f"{parts[k]:>16.3f}" for k in LABELS)
+            + f"{r:>10.2f}{episode[v.name]:>18.0f}"
         )
     names = list(overall)
     for n in names[1:]:
-        print(f"speed-up {n} / {names[0]}: {overall[n] / overall[names[0]]:.2f}x overall")
+        print(f"speed-up {n} / {names[0]}: {overall[n] / overall[names[0]]:.2f}x per update, "
+              f"{episode[n] / episode[names[0]]:.2f}x over an episode")
     for v in variants:
         v.collector.shutdown()
 

@@ -8,7 +8,14 @@ import pytest
 import torch
 
 from swimrl.flows.base import gradient_norm2
-from swimrl.flows.stochastic import TAU_K, StochasticFlow, gaussian_spectrum
+from swimrl.flows.grid import PeriodicGrid
+from swimrl.flows.stochastic import (
+    TAU_K,
+    StochasticFlow,
+    band_limit,
+    gaussian_spectrum,
+    stream_function_channels,
+)
 
 
 def test_discrete_spectrum_has_the_analytic_moments():
@@ -105,3 +112,39 @@ def test_huge_kubo_is_frozen():
     c0 = flow.coeffs.clone()
     flow.coefficient_path(20000, 0.005)  # one full episode of T = 200 tau_K
     assert torch.allclose(flow.coeffs, c0, atol=5e-3 * c0.abs().max())
+
+
+@pytest.mark.parametrize("n_grid, spacing", [(128, 0.1), (400, 0.025)])
+def test_band_limited_synthesis_equals_the_full_fft(n_grid, spacing):
+    """The direct sums over |m| <= K give IFFT(mult sqrt(P) FFT(w)) of the same white field
+    to float64 round-off (the dropped modes weigh <= 1e-13), for every channel."""
+    flow = StochasticFlow(1, 10.0, n_grid=n_grid, spacing=spacing, dtype=torch.float64)
+    assert flow._synthesis is not None
+    w = torch.randn(2, 3, n_grid, n_grid, dtype=torch.float64,
+                    generator=torch.Generator().manual_seed(4))
+    full = stream_function_channels(flow._sqrt_spectrum * torch.fft.fft2(w), flow.grid)
+    full = full.permute(0, 2, 3, 1, 4)  # the basis layout (B, n_y, n_x, M, 5)
+    fast = flow._synthesis(w)
+    scale = full.abs().amax(dim=(0, 1, 2, 3))
+    assert ((fast - full).abs().amax(dim=(0, 1, 2, 3)) / scale).max() < 1e-12
+
+
+def test_redraw_is_the_same_realisation_as_the_fft_path():
+    """Same generator state -> the same float32 fields whichever synthesis draws them."""
+    fields = []
+    for fast in (True, False):
+        gen = torch.Generator().manual_seed(2)
+        flow = StochasticFlow(3, 1.0, n_grid=128, spacing=0.1, generator=gen)
+        if not fast:
+            flow._synthesis = None
+        flow.reset()
+        fields.append((flow.basis.clone(), flow.coeffs.clone()))
+    (b1, c1), (b2, c2) = fields
+    assert torch.equal(c1, c2)
+    torch.testing.assert_close(b1, b2, rtol=0, atol=2e-6 * float(b2.abs().max()))
+
+
+def test_band_limit_needs_resolved_modes():
+    """K = 18 of 200 at the default L = 10, n = 400; None on a grid that resolves no cut-off."""
+    assert band_limit(PeriodicGrid(400, 10.0), 1.0) == 18
+    assert band_limit(PeriodicGrid(16, 8.0), 1.0) is None
