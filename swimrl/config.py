@@ -18,7 +18,7 @@ from pathlib import Path
 from omegaconf import DictConfig, ListConfig, OmegaConf
 
 from swimrl.analysis.figures import FiguresConfig
-from swimrl.analysis.fit_minimal import FitConfig
+from swimrl.analysis.fit_minimal import FitConfig, read_coefficients
 from swimrl.analysis.gain_scan import GainScanConfig
 from swimrl.env import EnvParams
 from swimrl.errors import as_bool, as_int, one_of
@@ -190,6 +190,7 @@ def compare_config(cfg: DictConfig) -> CompareConfig:
         [_float(x) for x in c.naive_shape_factors],
         minimal,
         [str(p) for p in (c.get("policies") or [])],
+        [read_coefficients(p) for p in (c.get("minimal_fits") or [])],
     )
     for v in variants:
         v.strategy.check_bound(setup.params.shape_factor_max)

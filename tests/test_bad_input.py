@@ -64,6 +64,8 @@ CASES = [
     (EVAL, ["flow=dns", "flow.spinup.time=inf"], "flow.spinup.time"),
     (EVAL, ["flow=dns", "flow.dns.nu=inf"], "flow.dns.nu"),
     (COMPARE, ["compare.naive_shape_factors=[nan]"], "shape_factor"),
+    (COMPARE, ["compare.strategies=[minimal]", "compare.minimal_fits=[{tmp}/nowhere]"],
+     "{tmp}/nowhere"),
     # incomplete DNS store (item 7)
     (EVAL, ["flow=dns_replay", "flow.path={tmp}/incomplete.zarr"], "flow.allow_incomplete"),
     (EVAL, ["flow=dns_replay", "flow.path={tmp}/nowhere.zarr"], "flow.path"),

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import json
+
 import pytest
 
 from swimrl.config import compare_config, eval_config, eval_setup
@@ -47,3 +49,24 @@ def test_compare_with_shared_flows(compose_cfg):
         _strategy(compose_cfg, "strategy=sto"),
         _strategy(compose_cfg, "strategy=naive", "strategy.shape_factor=0.98")])
     assert rec["rows"][1]["per_flow"] == pytest.approx(ref[1]["per_flow"], rel=0, abs=0)
+
+
+def test_minimal_expands_over_fitted_coefficients(compose_cfg, tmp_path):
+    """compare.minimal_fits: one 'minimal(<run dir>)' row per fit.json, with its c1..c4,
+    equal to the minimal model given by compare.minimal."""
+    fits = []
+    for name, c in (("ku10", (0.9, 0.7, 0.3, 0.05)), ("ku1e7", (0.5, 0.2, 0.1, -0.1))):
+        (tmp_path / name).mkdir()
+        coeffs = dict(zip(("c1", "c2", "c3", "c4"), c, strict=True))
+        (tmp_path / name / "fit.json").write_text(json.dumps({"coefficients": coeffs}))
+        fits.append(str(tmp_path / name))
+    over = SMALL + SIZE + ["compare.strategies=[minimal]", "compare.shared_flows=true",
+                           f"compare.minimal_fits=[{fits[0]},{fits[1]}/fit.json]"]
+    rec = compare(compare_config(compose_cfg(over, name="compare")))
+    assert [r["label"] for r in rec["rows"]] == ["minimal(ku10)", "minimal(ku1e7)"]
+    one = SMALL + SIZE + ["compare.strategies=[minimal,sto]", "compare.shared_flows=true",
+                          "compare.minimal={c1:0.9,c2:0.7,c3:0.3,c4:0.05}"]
+    ref = compare(compare_config(compose_cfg(one, name="compare")))
+    # block 0 of a shared run is independent of the other blocks (test above)
+    assert rec["rows"][0]["per_flow"] == ref["rows"][0]["per_flow"]
+    assert rec["rows"][1]["per_flow"] != rec["rows"][0]["per_flow"]

@@ -18,14 +18,16 @@ the command that evaluates the fitted model:
 
 from __future__ import annotations
 
+import json
 from dataclasses import dataclass
+from pathlib import Path
 
 import numpy as np
 import torch
 from scipy.optimize import curve_fit
 
 from swimrl.env import SwimmerEnv
-from swimrl.errors import as_int
+from swimrl.errors import ConfigError, as_int
 from swimrl.evaluation.rollout import EvalConfig, actor_for, chunk_seed, run_episodes
 from swimrl.policies.baselines import build_strategy, minimal_model
 
@@ -72,6 +74,23 @@ def fit_minimal(signals: np.ndarray, actions: np.ndarray, lam_max: float, p0=(1.
     resid = actions - model(signals.T, *coeffs)
     r2 = 1.0 - resid.var() / actions.var() if actions.var() > 0 else float("nan")
     return coeffs, np.sqrt(np.diag(cov)), float(r2)
+
+
+def read_coefficients(path: str | Path) -> tuple[str, tuple[float, ...]]:
+    """``(label, (c1, c2, c3, c4))`` of a ``fit.json`` written by ``swimrl-fit-minimal``
+    (a file, or the run directory holding it); the label is the run directory's name."""
+    path = Path(path)
+    if path.is_dir():
+        path = path / "fit.json"
+    if not path.is_file():
+        raise ConfigError(f"compare.minimal_fits has {str(path)!r}: not a file; allowed the "
+                          "fit.json (or its run directory) of swimrl-fit-minimal")
+    try:
+        coeffs = json.loads(path.read_text())["coefficients"]
+        return path.parent.name, tuple(float(coeffs[k]) for k in ("c1", "c2", "c3", "c4"))
+    except (ValueError, KeyError, TypeError) as err:
+        raise ConfigError(f"compare.minimal_fits has {str(path)!r}: no coefficients c1..c4 "
+                          f"({err}); allowed the fit.json of swimrl-fit-minimal") from None
 
 
 def run_fit(cfg: FitConfig) -> dict:

@@ -47,10 +47,12 @@ def strategy_variants(
     naive_shape_factors: Sequence[float] = (0.98,),
     minimal: Sequence[float] = (1.0, 0.0, 0.0, 0.0),
     policies: Sequence[str] = (),
+    minimal_fits: Sequence[tuple[str, Sequence[float]]] = (),
 ) -> tuple[Variant, ...]:
     """Variants of ``compare.strategies``: ``naive`` expands over ``naive_shape_factors``,
-    ``minimal`` takes the ``minimal`` coefficients c1..c4 and ``policy`` expands over
-    ``policies`` (run dirs, checkpoints, ``pretrained/NAME``)."""
+    ``minimal`` takes the ``minimal`` coefficients c1..c4, or expands over the labelled
+    ``minimal_fits`` where given, and ``policy`` expands over ``policies`` (run dirs,
+    checkpoints, ``pretrained/NAME``)."""
     allowed = "a list of 'naive', 'sto', 'minimal', 'policy'"
     out: list[Variant] = []
     for name in strategies:
@@ -60,6 +62,9 @@ def strategy_variants(
                 out.append(Variant(f"naive({float(lam):+.2f})", spec))
         elif name == "sto":
             out.append(Variant("sto", StrategySpec("sto")))
+        elif name == "minimal" and minimal_fits:
+            out += [Variant(f"minimal({label})", StrategySpec("minimal", coeffs=tuple(c)))
+                    for label, c in minimal_fits]
         elif name == "minimal":
             out.append(Variant("minimal", StrategySpec("minimal", coeffs=tuple(minimal))))
         elif name == "policy":
