@@ -17,11 +17,11 @@ from pathlib import Path
 
 from omegaconf import DictConfig, ListConfig, OmegaConf
 
-from swimrl.analysis.figures import FiguresConfig
+from swimrl.analysis.figures import DNSFiguresConfig, FiguresConfig
 from swimrl.analysis.fit_minimal import FitConfig, read_coefficients
 from swimrl.analysis.gain_scan import GainScanConfig
 from swimrl.env import EnvParams
-from swimrl.errors import as_bool, as_int, one_of
+from swimrl.errors import as_bool, as_float, as_int, one_of
 from swimrl.evaluation.compare import CompareConfig, strategy_variants
 from swimrl.evaluation.rollout import EvalConfig, EvalSetup, EvalSizes
 from swimrl.flows.build import (
@@ -244,7 +244,23 @@ def figures_config(cfg: DictConfig) -> FiguresConfig:
         results=Path(to_absolute_path(str(cfg.results))),
         curves=Path(to_absolute_path(str(cfg.curves))),
         fits=Path(to_absolute_path(str(cfg.fits))),
+        dns=None if cfg.get("dns") is None else dns_figures_config(cfg.dns, to_absolute_path),
         progress=as_bool("progress", cfg.progress),
+    )
+
+
+def dns_figures_config(node: DictConfig, absolute) -> DNSFiguresConfig:
+    """``dns.*`` of ``conf/figures.yaml`` (paths from the launch directory)."""
+    decode_n = node.get("decode_n")
+    return DNSFiguresConfig(
+        store=Path(absolute(str(node.store))), record=Path(absolute(str(node.record))),
+        transfer=Path(absolute(str(node.transfer))), checks=Path(absolute(str(node.checks))),
+        policy=str(node.policy),
+        n_swimmers=as_int("dns.n_swimmers", node.n_swimmers, low=1),
+        n_traj=as_int("dns.n_traj", node.n_traj, low=1),
+        decode_n=None if decode_n is None else as_int("dns.decode_n", decode_n, low=8),
+        glyph_window=as_float("dns.glyph_window", node.glyph_window, lambda v: v > 0, "> 0"),
+        glyph_every=as_float("dns.glyph_every", node.glyph_every, lambda v: v > 0, "> 0"),
     )
 
 

@@ -183,6 +183,9 @@ def test_checks_across_independent_runs(tmp_path):
         assert np.mean(series["tau_k"]) == pytest.approx(store.tau_k, rel=0.1)
         assert run["u_rms_t"]["rel_std"] >= 0 and math.isfinite(run["tau_k_t"]["drift"])
     assert set(checks["pooled_moments"]) == {"omega", "S_xx", "S_xy"}
+    for curve in checks["pooled_pdfs"].values():  # the drawn PDFs, for Fig. dnsFlow(b)
+        z, pdf = np.asarray(curve["z"]), np.asarray(curve["pdf"])
+        assert (pdf * (z[1] - z[0])).sum() == pytest.approx(1.0, abs=0.01)
 
 
 def test_finished_store_extends_to_the_longer_run(tmp_path):

@@ -123,14 +123,20 @@ def gradient_samples(store: DNSStore, idx: np.ndarray, chunk: int = 8) -> dict[s
     return {k: np.concatenate(v) for k, v in parts.items()}
 
 
-def plot_pdfs(samples: dict[str, np.ndarray], out: Path) -> dict[str, dict[str, float]]:
-    """Semi-log PDFs of ``x / std(x)`` for each channel and the Gaussian (paper Fig. 6b)."""
+def plot_pdfs(samples: dict[str, np.ndarray], out: Path,
+              curves: dict[str, dict[str, list[float]]] | None = None
+              ) -> dict[str, dict[str, float]]:
+    """Semi-log PDFs of ``x / std(x)`` for each channel and the Gaussian (paper Fig. 6b);
+    returns the moments, and puts the drawn ``{"z", "pdf"}`` of each channel into ``curves``
+    when given."""
     fig, ax = plt.subplots(figsize=(5.5, 4))
     stats = {}
     for name, x in samples.items():
         t = torch.from_numpy(x)
         z, pdf, _ = dg.standardized_pdf(t, bins=121, half_width=12.0)
         stats[name] = dg.moments(t)
+        if curves is not None:
+            curves[name] = {"z": z.tolist(), "pdf": pdf.tolist()}
         keep = pdf > 0
         label = {"omega": r"$\omega$", "S_xx": r"$S_{xx}$", "S_xy": r"$S_{xy}$"}[name]
         ax.semilogy(z[keep], pdf[keep], color=COLOURS[name],
@@ -281,9 +287,10 @@ def check_stores(paths: list[Path], out_dir: Path, n_snapshots: int = 50,
     fig.tight_layout()
     fig.savefig(out_dir / "dns_stability.png", dpi=130)
     plt.close(fig)
+    curves: dict[str, dict[str, list[float]]] = {}
     moments = plot_pdfs({k: np.concatenate(v) for k, v in pooled.items()},
-                        out_dir / "dns_pdfs_all.png")
-    checks = {"runs": runs, "pooled_moments": moments,
+                        out_dir / "dns_pdfs_all.png", curves)
+    checks = {"runs": runs, "pooled_moments": moments, "pooled_pdfs": curves,
               "all_resolved": all(r["kmax_l_nu"] >= 1 for r in runs),
               "u_rms_spread_over_runs": float(np.std([r["u_rms"] for r in runs])
                                               / np.mean([r["u_rms"] for r in runs]))}

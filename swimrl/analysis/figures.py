@@ -54,6 +54,27 @@ def ku_name(kubo: float) -> str:
 
 
 @dataclass(frozen=True)
+class DNSFiguresConfig:
+    """Where the DNS figure's records are (``dns.*`` of ``conf/figures.yaml``)."""
+
+    store: Path
+    """A held-out stored run to replay when ``record`` does not exist yet."""
+    record: Path
+    """The committed replay record (``.npz``)."""
+    transfer: Path
+    """Directory searched for ``comparison.json`` (one per held-out realisation)."""
+    checks: Path
+    """``dns_checks.json`` of ``swimrl-dns-plots`` (pooled PDFs)."""
+    policy: str = "pretrained/dns"
+    """The smart policy of (a) and the videos."""
+    n_swimmers: int = 300
+    n_traj: int = 4
+    decode_n: int | None = 384
+    glyph_window: float = 20.0
+    glyph_every: float = 2.0
+
+
+@dataclass(frozen=True)
 class FiguresConfig:
     """``swimrl-figures``: where, which, and how large (defaults in ``conf/figures.yaml``)."""
 
@@ -87,6 +108,8 @@ class FiguresConfig:
     """Searched for ``curves.csv`` (trainingCurves)."""
     fits: Path = Path("docs/results/minimal_fits")
     """``ku*/fit.json`` of ``swimrl-fit-minimal`` at each Ku (ablation (b), (c))."""
+    dns: DNSFiguresConfig | None = None
+    """Records of Fig. dnsFlow and videos 5, 10 (None: not drawn)."""
     progress: bool = True
 
 
@@ -649,7 +672,9 @@ def build_robustness(cfg: FiguresConfig) -> dict:
 
 
 def build_videos(cfg: FiguresConfig) -> dict:
-    """Supplemental videos 1-4 (trajectories) and 6-9 (clouds) into ``<out>/../videos``."""
+    """Supplemental videos 1-4 (trajectories) and 6-9 (clouds) into ``<out>/../videos``, and
+    5 and 10 in the DNS from its replay record."""
+    from .dns_figures import dns_record
     from .videos import video_cloud, video_trajectories
 
     out, where = {}, Path(cfg.out).parent / "videos"
@@ -657,7 +682,22 @@ def build_videos(cfg: FiguresConfig) -> dict:
         rec = ku_record(cfg, kubo)
         out[i + 1] = video_trajectories(rec, kubo, where / f"video{i + 1}_{ku_name(kubo)}.mp4")
         out[i + 6] = video_cloud(rec, kubo, where / f"video{i + 6}_{ku_name(kubo)}_cloud.mp4")
+    rec = None if cfg.dns is None else dns_record(cfg, cfg.dns)
+    if rec is None:
+        out["pending"] = "videos 5, 10: no DNS replay record (dns.record) and no store"
+    else:
+        out[5] = video_trajectories(rec, "DNS", where / "video5_dns.mp4", unit="L")
+        out[10] = video_cloud(rec, "DNS", where / "video10_dns_cloud.mp4", unit="L")
     return out
+
+
+def build_dns_flow(cfg: FiguresConfig) -> dict:
+    """Fig. dnsFlow (:mod:`swimrl.analysis.dns_figures`)."""
+    from .dns_figures import build_dns_flow as build
+
+    if cfg.dns is None:
+        return {"pending": "no dns.* records configured"}
+    return build(cfg, cfg.dns)
 
 
 # -- Fig. ablation (b), (c): the minimal model across Ku ----------------------------------------
@@ -748,6 +788,7 @@ BUILDERS: dict[str, Callable[[FiguresConfig], dict]] = {
     "ablation": build_ablation,
     "robustness-noise": build_robustness_noise,
     "robustness": build_robustness,
+    "dnsFlow": build_dns_flow,
     "videos": build_videos,
 }
 

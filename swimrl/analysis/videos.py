@@ -5,7 +5,9 @@ r"""The paper's supplemental videos (MP4, Matplotlib + the ffmpeg of ``imageio-f
 * :func:`video_cloud` (videos 6-9): the displacements of all recorded swimmers (a dispersion
   cloud from the origin), inset: the ensemble-mean distance from the start.
 
-Both take the arrays of :func:`swimrl.analysis.figures.ku_record` and return what they drew.
+Both take the arrays of :func:`swimrl.analysis.figures.ku_record` (or of the DNS replay
+record, :mod:`swimrl.analysis.dns_figures`) and return what they drew; ``flow`` is the Kubo
+number or a label (``"DNS"``), ``unit`` the length unit of the positions.
 """
 
 from __future__ import annotations
@@ -44,8 +46,13 @@ def _distance_inset(fig, ax, t: np.ndarray, dist: np.ndarray):
     return marks
 
 
-def video_trajectories(rec: dict, kubo: float, path: Path, fps: int = 8) -> dict:
-    """Video 1-4 at ``kubo`` from ``rec['traj_abs']`` and ``rec['vorticity']``."""
+def _flow_label(flow: float | str) -> str:
+    return flow if isinstance(flow, str) else f"Ku = {flow:g}"
+
+
+def video_trajectories(rec: dict, flow: float | str, path: Path, fps: int = 8,
+                       unit: str = r"\ell_f") -> dict:
+    """Videos 1-5 from ``rec['traj_abs']`` and ``rec['vorticity']``."""
     import matplotlib.pyplot as plt
     from matplotlib.animation import FuncAnimation
 
@@ -68,8 +75,8 @@ def video_trajectories(rec: dict, kubo: float, path: Path, fps: int = 8) -> dict
     ax.set_xlim(lo[0], hi[0])
     ax.set_ylim(lo[1], hi[1])
     ax.set_aspect("equal")
-    ax.set_xlabel(r"$x/\ell_f$")
-    ax.set_ylabel(r"$y/\ell_f$")
+    ax.set_xlabel(f"$x/{unit}$")
+    ax.set_ylabel(f"$y/{unit}$")
     ax.legend(fontsize=7, loc="lower right")
     fig.colorbar(im, ax=ax, shrink=0.7, label=r"$\omega\tau_K$")
     marks = _distance_inset(fig, ax, t, dist)
@@ -82,14 +89,15 @@ def video_trajectories(rec: dict, kubo: float, path: Path, fps: int = 8) -> dict
             for i, line in enumerate(row):
                 line.set_data(traj[j, i, : f + 1, 0], traj[j, i, : f + 1, 1])
             marks[j].set_data(t[f: f + 1], dist[j, f: f + 1])
-        title.set_text(f"Ku = {kubo:g}, t = {t[f]:.0f} $\\tau_K$")
+        title.set_text(f"{_flow_label(flow)}, t = {t[f]:.0f} $\\tau_K$")
 
     _save(fig, FuncAnimation(fig, frame, frames=n), path, fps)
     return {"frames": n, "extent": extent, "distance": dist[:, -1].tolist()}
 
 
-def video_cloud(rec: dict, kubo: float, path: Path, fps: int = 8) -> dict:
-    """Video 6-9 at ``kubo`` from ``rec['cloud']`` (``(3, S, frames, 2)``)."""
+def video_cloud(rec: dict, flow: float | str, path: Path, fps: int = 8,
+                unit: str = r"\ell_f") -> dict:
+    """Videos 6-10 from ``rec['cloud']`` (``(3, S, frames, 2)``)."""
     import matplotlib.pyplot as plt
     from matplotlib.animation import FuncAnimation
 
@@ -105,8 +113,8 @@ def video_cloud(rec: dict, kubo: float, path: Path, fps: int = 8) -> dict:
     ax.set_xlim(-r, r)
     ax.set_ylim(-r, r)
     ax.set_aspect("equal")
-    ax.set_xlabel(r"$\Delta x/\ell_f$")
-    ax.set_ylabel(r"$\Delta y/\ell_f$")
+    ax.set_xlabel(f"$\\Delta x/{unit}$")
+    ax.set_ylabel(f"$\\Delta y/{unit}$")
     ax.legend(fontsize=7, loc="lower right", markerscale=4)
     marks = _distance_inset(fig, ax, t, dist)
     title = ax.set_title("", fontsize=9)
@@ -116,7 +124,7 @@ def video_cloud(rec: dict, kubo: float, path: Path, fps: int = 8) -> dict:
         for j, d in enumerate(dots):
             d.set_data(cloud[j, :, f, 0], cloud[j, :, f, 1])
             marks[j].set_data(t[f: f + 1], dist[j, f: f + 1])
-        title.set_text(f"Ku = {kubo:g}, {cloud.shape[1]} swimmers per strategy, "
+        title.set_text(f"{_flow_label(flow)}, {cloud.shape[1]} swimmers per strategy, "
                        f"t = {t[f]:.0f} $\\tau_K$")
 
     _save(fig, FuncAnimation(fig, frame, frames=n), path, fps)

@@ -1,0 +1,291 @@
+r"""Fig. ``dnsFlow`` and the DNS videos (5, 10) from committed records (``swimrl-figures``).
+
+* (a) the vorticity ``omega tau_K`` of a held-out DNS realisation with one smart swimmer's
+  trajectory over ``glyph_window`` ``tau_K`` and its shape every ``glyph_every`` ``tau_K``:
+  an ellipse along ``p`` with the aspect ratio ``a = ((1 + Lambda)/(1 - Lambda))^{1/2}`` of
+  the spheroid (``Lambda = (a^2 - 1)/(a^2 + 1)``), capped at :data:`GLYPH_ASPECT_MAX` so the
+  glyphs stay visible; prolate orange, oblate blue;
+* (b) the PDFs of ``omega``, ``S_xx``, ``S_xy`` (each over its standard deviation) pooled
+  over the stored runs, from ``dns_checks.json`` of ``swimrl-dns-plots``;
+* (c) the transfer: ``R_hat / R_hat_STO`` of the policies trained at each Ku and of the
+  minimal model with the coefficients fitted at each Ku, against that Ku; the DNS-trained
+  policy and naive as horizontal lines. Ratios are paired per flow (one flow = one held-out
+  realisation and start time, all strategies on the same swimmers' initial conditions); the
+  bars are the standard deviation of the per-flow ratio over flows, i.e. over independent
+  realisations and start points (the paper's convention).
+
+The replay record (``record``) is made once from a stored run when that run exists
+(``swimrl-dns seed=...``; the stores are too large to commit) and is then read from the
+committed ``.npz``: a fresh clone draws the figure and the videos without the store.
+Positions are in units of the DNS box ``L``.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+from pathlib import Path
+
+import numpy as np
+
+from swimrl.evaluation.rollout import EvalSetup, EvalSizes
+from swimrl.flows.build import StoredRunSpec
+
+from .figures import (
+    COLORS,
+    FRAME_EVERY,
+    STRATEGIES,
+    DNSFiguresConfig,
+    FiguresConfig,
+    _plt,
+    _save,
+    record_strategies,
+)
+
+#: Largest aspect ratio drawn for a glyph (the swimmers' own reach ~10 at |Lambda| = 0.98).
+GLYPH_ASPECT_MAX = 4.0
+#: The strategies' order in a record (smart = the configured policy).
+RECORD_ORDER = STRATEGIES
+
+
+def spheroid_aspect(shape_factor: np.ndarray) -> np.ndarray:
+    """Aspect ratio ``a = ((1 + Lambda) / (1 - Lambda))^{1/2}`` (inverse of
+    ``Lambda = (a^2 - 1) / (a^2 + 1)``)."""
+    lam = np.asarray(shape_factor, dtype=float)
+    return np.sqrt((1 + lam) / (1 - lam))
+
+
+# -- the replay record ---------------------------------------------------------------------------
+def make_record(cfg: FiguresConfig, dns: DNSFiguresConfig) -> dict[str, np.ndarray]:
+    """Smart (``dns.policy``), naive and STO from the same start time and initial conditions
+    in ``dns.store``: clouds and trajectories every :data:`FRAME_EVERY` decisions, the
+    vorticity of the run at those times, and smart's first ``n_traj`` swimmers at every
+    decision (position, orientation, Lambda). Lengths in units of the box."""
+    spec = StoredRunSpec((Path(dns.store),), decode_n=dns.decode_n)
+    sizes = EvalSizes(1, dns.n_swimmers, 1, cfg.progress, dns.n_swimmers)
+    setup = EvalSetup(flow=spec, params=cfg.params, runtime=cfg.runtime, sizes=sizes,
+                      seed=cfg.seed, record={})
+    a = record_strategies(setup, [dns.policy, "naive", "sto"], "DNS", FRAME_EVERY)
+    box = float(a["box"])
+    pos = np.swapaxes(a["position"], 0, 1)[:, 0] / box  # (3, S, N+1, 2)
+    disp = pos - pos[..., :1, :]
+    nt = min(dns.n_traj, pos.shape[1])
+    return {
+        "cloud": disp[..., ::FRAME_EVERY, :].astype(np.float32),
+        "traj_abs": pos[:, :nt, ::FRAME_EVERY].astype(np.float32),
+        "smart_path": pos[0, :nt].astype(np.float32),
+        "smart_theta": np.swapaxes(a["theta"], 0, 1)[0, 0, :nt].astype(np.float32),
+        "smart_Lambda": np.swapaxes(a["Lambda"], 0, 1)[0, 0, :nt].astype(np.float32),
+        "R_hat": np.swapaxes(a["R_hat"], 0, 1)[:, 0],
+        "vorticity": a["vorticity"].astype(np.float16),
+        "field_time": a["field_time"],
+        "time": a["time"], "tau_K": a["tau_K"], "box": np.asarray(1.0),
+        "reference_distance": a["reference_distance"],
+        "box_dns": np.asarray(box), "update_interval": a["update_interval"],
+        "policy": np.asarray(dns.policy), "store": np.asarray(str(dns.store)),
+    }
+
+
+def dns_record(cfg: FiguresConfig, dns: DNSFiguresConfig) -> dict[str, np.ndarray] | None:
+    """The committed record; made from ``dns.store`` first if it is missing and the store
+    exists; None if neither exists."""
+    path = Path(dns.record)
+    if not path.exists():
+        if not Path(dns.store).exists():
+            return None
+        data = make_record(cfg, dns)
+        path.parent.mkdir(parents=True, exist_ok=True)
+        tmp = path.with_name(path.name + ".tmp.npz")
+        np.savez_compressed(tmp, **data)
+        tmp.replace(path)
+    with np.load(path) as z:
+        out = {k: z[k] for k in z.files}
+    out["vorticity"] = out["vorticity"].astype(np.float32)
+    return out
+
+
+# -- (c) the transfer ----------------------------------------------------------------------------
+def read_transfer(root: Path) -> dict[str, np.ndarray]:
+    """Per-flow ``R_hat`` of each strategy label over every ``comparison.json`` under
+    ``root`` (one per held-out realisation), concatenated over realisations:
+    ``{label: (flows,)}``, plus ``realisation`` (the index of each flow's record)."""
+    per: dict[str, list[np.ndarray]] = {}
+    which: list[np.ndarray] = []
+    for i, path in enumerate(sorted(Path(root).rglob("comparison.json"))):
+        rec = json.loads(path.read_text())
+        for row in rec["rows"]:
+            per.setdefault(row["label"], []).append(np.asarray(row["per_flow"], dtype=float))
+        which.append(np.full(len(rec["rows"][0]["per_flow"]), i))
+    if not per:
+        return {}
+    sizes = {len(v) for v in per.values()}
+    if sizes != {len(which)}:
+        raise ValueError(f"{root}: the records do not all hold the same strategies")
+    out = {k: np.concatenate(v) for k, v in per.items()}
+    out["realisation"] = np.concatenate(which)
+    return out
+
+
+def transfer_summary(per: dict[str, np.ndarray], reference: str = "sto") -> dict[str, dict]:
+    """Per label: mean ``R_hat`` over flows, the mean per-flow ratio to ``reference`` and its
+    standard deviation over flows (realisations x start points), and the same ratio over
+    realisations only (their means; std over realisations)."""
+    ref, real = per[reference], per["realisation"]
+    out = {}
+    for label, r in per.items():
+        if label == "realisation":
+            continue
+        ratio = r / ref
+        by_real = np.array([r[real == i].mean() / ref[real == i].mean()
+                            for i in np.unique(real)])
+        out[label] = {"R_hat": float(r.mean()), "R_hat_std": float(r.std(ddof=1)),
+                      "ratio": float(ratio.mean()), "ratio_std": float(ratio.std(ddof=1)),
+                      "ratio_realisations": by_real.tolist(),
+                      "ratio_realisation_std": float(by_real.std(ddof=1))
+                      if len(by_real) > 1 else math.nan,
+                      "n_flows": int(r.size), "n_realisations": int(len(by_real))}
+    return out
+
+
+def _ku_of(label: str) -> float | None:
+    """Ku of ``policy(.../ku10)`` or ``minimal(ku1e7)``; None for other labels."""
+    inner = label[label.find("(") + 1:-1].rstrip("/").split("/")[-1]
+    if inner.startswith("ku"):
+        try:
+            return float(inner[2:])
+        except ValueError:
+            return None
+    return None
+
+
+# -- the figure ----------------------------------------------------------------------------------
+def _glyphs(ax, path: np.ndarray, theta: np.ndarray, lam: np.ndarray, every: int,
+            size: float) -> int:
+    from matplotlib.patches import Ellipse
+
+    n = 0
+    for i in range(0, len(lam), every):
+        a = min(float(spheroid_aspect(np.clip(lam[i], -0.999, 0.999))), GLYPH_ASPECT_MAX)
+        a = max(a, 1 / GLYPH_ASPECT_MAX)
+        color = "tab:orange" if lam[i] > 0 else "tab:blue"
+        ax.add_patch(Ellipse(tuple(path[i]), size * math.sqrt(a), size / math.sqrt(a),
+                             angle=math.degrees(float(theta[i])), facecolor=color,
+                             edgecolor="k", lw=0.4, zorder=4))
+        n += 1
+    return n
+
+
+def fig_dns_flow(rec: dict | None, pdfs: dict | None, transfer: dict[str, dict] | None,
+                 path: Path, glyph_window: float = 20.0, glyph_every: float = 2.0,
+                 title: str = "") -> dict:
+    """(a) vorticity, trajectory and glyphs; (b) PDFs; (c) transfer ratios. Panels whose
+    record is None say so instead."""
+    plt = _plt()
+    fig, (a, b, c) = plt.subplots(1, 3, figsize=(14, 4.4))
+    drawn: dict = {}
+    if rec is not None:
+        tau_u = float(rec["update_interval"])  # decisions every T_u = update_interval tau_K
+        n_win = int(round(glyph_window / tau_u))
+        x = rec["smart_path"][0, : n_win + 1]
+        vort = rec["vorticity"][0]
+        m = vort.shape[0]
+        shift = np.floor(x.min(0))  # the tile holding the start
+        reps = (np.ceil(x.max(0)) - shift).astype(int).clip(min=1)
+        extent = [shift[0], shift[0] + reps[0], shift[1], shift[1] + reps[1]]
+        vmax = float(np.abs(rec["vorticity"]).max())
+        im = a.imshow(np.tile(vort, (reps[1], reps[0])), origin="lower", extent=extent,
+                      cmap="RdBu_r", vmin=-vmax, vmax=vmax, interpolation="bilinear")
+        fig.colorbar(im, ax=a, shrink=0.8, label=r"$\omega\tau_K$ at $t = 0$")
+        a.plot(x[:, 0], x[:, 1], color="k", lw=1.0, zorder=3)
+        g = _glyphs(a, x, rec["smart_theta"][0, :n_win], rec["smart_Lambda"][0, :n_win],
+                    max(1, int(round(glyph_every / tau_u))), 0.06)
+        a.set_xlim(x[:, 0].min() - 0.15, x[:, 0].max() + 0.15)
+        a.set_ylim(x[:, 1].min() - 0.15, x[:, 1].max() + 0.15)
+        a.set_aspect("equal")
+        a.set_xlabel(r"$x/L$")
+        a.set_ylabel(r"$y/L$")
+        a.set_title(f"(a) smart swimmer, {glyph_window:g} $\\tau_K$; glyphs every "
+                    f"{glyph_every:g} $\\tau_K$ (orange prolate, blue oblate)", fontsize=8)
+        drawn["a"] = {"glyphs": g, "grid": m, "window_decisions": n_win}
+    else:
+        a.text(0.5, 0.5, "no DNS replay record", ha="center", transform=a.transAxes)
+    if pdfs:
+        names = {"omega": r"$\omega$", "S_xx": r"$S_{xx}$", "S_xy": r"$S_{xy}$"}
+        for name, d in pdfs.items():
+            z, p = np.asarray(d["z"]), np.asarray(d["pdf"])
+            keep = p > 0
+            b.semilogy(z[keep], p[keep], label=names.get(name, name))
+        zz = np.linspace(-6, 6, 241)
+        b.semilogy(zz, np.exp(-zz**2 / 2) / math.sqrt(2 * math.pi), "k--", label="Gaussian")
+        b.set_ylim(1e-7, 1)
+        b.set_xlabel(r"$X/\sigma_X$")
+        b.set_ylabel("PDF")
+        b.legend(fontsize=7, frameon=False)
+        drawn["b"] = sorted(pdfs)
+    else:
+        b.text(0.5, 0.5, "no pooled PDFs (swimrl-dns-plots)", ha="center", transform=b.transAxes)
+    b.set_title("(b) gradient PDFs, pooled over the stored runs", fontsize=8)
+    if transfer:
+        drawn["c"] = _draw_transfer(c, transfer)
+    else:
+        c.text(0.5, 0.5, "no transfer records", ha="center", transform=c.transAxes)
+    fig.suptitle(title, fontsize=8)
+    fig.tight_layout()
+    _save(fig, path)
+    return drawn
+
+
+def _draw_transfer(ax, summary: dict[str, dict]) -> dict:
+    series: dict[str, list[tuple[float, float, float]]] = {"smart": [], "minimal": []}
+    flat = {}
+    for label, s in summary.items():
+        ku = _ku_of(label)
+        kind = "minimal" if label.startswith("minimal") else "smart"
+        if ku is not None:
+            series[kind].append((ku, s["ratio"], s["ratio_std"]))
+        else:
+            flat[label] = s
+    styles = {"smart": dict(color=COLORS["smart"], marker="o", ls="-"),
+              "minimal": dict(color="tab:purple", marker="s", ls="--")}
+    for kind, pts in series.items():
+        if pts:
+            k, r, e = np.array(sorted(pts)).T
+            ax.errorbar(k, r, yerr=e, capsize=3, label=f"{kind} (trained at Ku)"
+                        if kind == "smart" else "minimal model (fitted at Ku)", **styles[kind])
+    ax.axhline(1.0, color=COLORS["STO"], lw=1.5, label="STO")
+    for label, s in flat.items():
+        if label.startswith("naive"):
+            ax.axhline(s["ratio"], color=COLORS["naive"], lw=1, label=label)
+        elif label.startswith("policy"):
+            ax.axhline(s["ratio"], color="k", ls=":", lw=1.5, label=f"DNS-trained {label[7:-1]}")
+            ax.axhspan(s["ratio"] - s["ratio_std"], s["ratio"] + s["ratio_std"], color="0.85",
+                       zorder=0)
+    ax.set_xscale("log")
+    ax.set_xlabel("Ku of training")
+    ax.set_ylabel(r"$\hat R / \hat R_{\rm STO}$ in the DNS")
+    n = next(iter(summary.values()))
+    ax.set_title(f"(c) transfer: {n['n_realisations']} held-out realisations, "
+                 f"{n['n_flows']} flows; bars: std over flows", fontsize=8)
+    ax.legend(fontsize=6, loc="lower right")
+    return {k: [list(p) for p in sorted(v)] for k, v in series.items()}
+
+
+def build_dns_flow(cfg: FiguresConfig, dns: DNSFiguresConfig) -> dict:
+    """Fig. dnsFlow from the committed records (the replay record made first if missing and
+    the store is there)."""
+    rec = dns_record(cfg, dns)
+    pdfs = None
+    if Path(dns.checks).exists():
+        pdfs = json.loads(Path(dns.checks).read_text()).get("pooled_pdfs")
+    per = read_transfer(dns.transfer) if Path(dns.transfer).exists() else {}
+    summary = transfer_summary(per) if per else None
+    out = fig_dns_flow(rec, pdfs, summary, cfg.out / "dnsFlow.png", dns.glyph_window,
+                       dns.glyph_every,
+                       f"held-out DNS realisation {Path(str(rec['store'])).name if rec else '-'}"
+                       f", smart = {dns.policy}, T = {cfg.params.duration:g} $\\tau_K$")
+    if summary:
+        out["transfer"] = summary
+    missing = [k for k, v in (("record", rec), ("pdfs", pdfs), ("transfer", summary)) if not v]
+    if missing:
+        out["pending"] = "missing: " + ", ".join(missing)
+    return out

@@ -1,0 +1,115 @@
+"""Fig. dnsFlow and the DNS videos: the replay record, the transfer summary, the drawing."""
+
+from __future__ import annotations
+
+import json
+import math
+
+import numpy as np
+import pytest
+import torch
+from hydra import compose, initialize_config_module
+
+from swimrl.analysis import dns_figures as dfig
+from swimrl.analysis.figures import DNSFiguresConfig, FiguresConfig
+from swimrl.env import EnvParams
+from swimrl.flows.build import StochasticSpec
+from swimrl.runtime import Runtime
+
+torch.set_num_threads(1)
+
+
+def test_glyph_aspect_inverts_the_shape_factor():
+    a = np.array([0.2, 1.0, 3.0, 9.95])
+    lam = (a**2 - 1) / (a**2 + 1)
+    assert dfig.spheroid_aspect(lam) == pytest.approx(a)
+
+
+def _comparison(path, rows: dict[str, list[float]]):
+    path.mkdir(parents=True)
+    (path / "comparison.json").write_text(json.dumps(
+        {"rows": [{"label": k, "per_flow": v} for k, v in rows.items()]}))
+
+
+def test_transfer_summary_pairs_each_flow_with_sto(tmp_path):
+    _comparison(tmp_path / "0", {"sto": [1.0, 2.0], "policy(pretrained/ku10)": [1.2, 2.8],
+                                 "minimal(ku10)": [0.9, 1.8], "naive(+0.98)": [0.5, 1.0]})
+    _comparison(tmp_path / "1", {"sto": [1.0, 1.0], "policy(pretrained/ku10)": [1.0, 1.2],
+                                 "minimal(ku10)": [1.1, 0.9], "naive(+0.98)": [0.5, 0.5]})
+    per = dfig.read_transfer(tmp_path)
+    assert per["realisation"].tolist() == [0, 0, 1, 1]
+    s = dfig.transfer_summary(per)
+    ratios = np.array([1.2, 1.4, 1.0, 1.2])
+    assert s["policy(pretrained/ku10)"]["ratio"] == pytest.approx(ratios.mean())
+    assert s["policy(pretrained/ku10)"]["ratio_std"] == pytest.approx(ratios.std(ddof=1))
+    assert s["policy(pretrained/ku10)"]["ratio_realisations"] == pytest.approx([4.0 / 3, 1.1])
+    assert s["naive(+0.98)"]["ratio"] == pytest.approx(0.5)
+    assert s["sto"]["ratio_std"] == 0 and s["sto"]["n_realisations"] == 2
+    assert dfig._ku_of("policy(pretrained/ku1e7)") == 1e7
+    assert dfig._ku_of("minimal(ku0.1)") == 0.1 and dfig._ku_of("policy(pretrained/dns)") is None
+
+
+def test_figure_draws_every_panel_from_tiny_records(tmp_path):
+    rng = np.random.default_rng(0)
+    n = 50  # decisions, T_u = 0.1 tau_K
+    path = np.cumsum(rng.normal(0, 0.01, (2, n + 1, 2)), axis=1) + 0.5
+    rec = {"smart_path": path, "smart_theta": rng.uniform(0, 6, (2, n + 1)),
+           "smart_Lambda": rng.uniform(-0.98, 0.98, (2, n)), "update_interval": np.asarray(0.1),
+           "vorticity": rng.normal(size=(3, 16, 16))}
+    z = np.linspace(-5, 5, 21)
+    pdfs = {"omega": {"z": z.tolist(), "pdf": np.exp(-z**2 / 2).tolist()}}
+    summary = {"sto": {"ratio": 1.0, "ratio_std": 0.0, "n_flows": 4, "n_realisations": 2},
+               "policy(pretrained/ku10)": {"ratio": 1.1, "ratio_std": 0.05, "n_flows": 4,
+                                           "n_realisations": 2},
+               "policy(pretrained/ku1)": {"ratio": 0.9, "ratio_std": 0.05, "n_flows": 4,
+                                          "n_realisations": 2},
+               "policy(pretrained/dns)": {"ratio": 1.2, "ratio_std": 0.04, "n_flows": 4,
+                                          "n_realisations": 2}}
+    out = dfig.fig_dns_flow(rec, pdfs, summary, tmp_path / "d.png", glyph_window=4.0,
+                            glyph_every=1.0)
+    assert (tmp_path / "d.png").stat().st_size > 10_000
+    assert out["a"]["window_decisions"] == 40 and out["a"]["glyphs"] == 4  # t = 0, 1, 2, 3
+    assert out["b"] == ["omega"]
+    assert out["c"]["smart"] == [[1.0, 0.9, 0.05], [10.0, 1.1, 0.05]]
+    none = dfig.fig_dns_flow(None, None, None, tmp_path / "e.png")
+    assert none == {} and (tmp_path / "e.png").exists()
+
+
+def test_replay_record_is_made_once_from_the_store_and_read_after(tmp_path):
+    """dns_record on a tiny stored run: made from the store, written, then read (also with
+    the store gone); box units; R_hat = final distance / v_s T; videos 5 and 10 draw it."""
+    from swimrl.analysis.videos import video_cloud, video_trajectories
+    from swimrl.config import dns_run
+    from swimrl.flows.dns.run import run_dns
+
+    store = tmp_path / "run.zarr"
+    with initialize_config_module("swimrl.conf", version_base="1.3"):
+        dns_cfg = compose(config_name="dns", overrides=[
+            "dns.n=32", "dns.nu=5e-3", "dns.dt=4e-3", "spinup.time=0.2",
+            "spinup.measure_time=0.1", "store.n_times=40", "store.diag_every=5",
+            "progress=false", "threads=1", f"store.path={store}"])
+    run_dns(dns_run(dns_cfg))
+    cfg = FiguresConfig(out=tmp_path / "fig", cache=tmp_path / "cache",
+                        runtime=Runtime.from_names("cpu", "float32", 1),
+                        params=EnvParams(duration=1.0), flow=StochasticSpec(kubo=10.0),
+                        progress=False)
+    dns = DNSFiguresConfig(store=store, record=tmp_path / "rec" / "record.npz",
+                           transfer=tmp_path / "none", checks=tmp_path / "none.json",
+                           policy="naive(-0.5)", n_swimmers=5, n_traj=2, decode_n=None)
+    a = dfig.dns_record(cfg, dns)
+    assert dns.record.exists()
+    frames = 1 + 10 // dfig.FRAME_EVERY  # every FRAME_EVERY decisions of 10
+    assert a["cloud"].shape == (3, 5, frames, 2) and a["smart_path"].shape == (2, 11, 2)
+    assert a["smart_Lambda"].shape == (2, 10) and np.allclose(a["smart_Lambda"], -0.5)
+    assert np.all(a["cloud"][:, :, 0] == 0) and float(a["box"]) == 1.0
+    final = a["smart_path"][:, -1] - a["smart_path"][:, 0]
+    assert np.allclose(a["traj_abs"][0, :, 0], a["smart_path"][:, 0])
+    dist = np.linalg.norm(final, axis=-1) * float(a["box_dns"])
+    assert dist / float(a["reference_distance"]) == pytest.approx(a["R_hat"][0, :2], rel=1e-4)
+    assert a["vorticity"].shape[0] == 2 and math.isclose(float(a["time"][-1]), 1.0)
+    store.rename(tmp_path / "gone.zarr")
+    b = dfig.dns_record(cfg, dns)
+    assert all(np.array_equal(a[k], b[k]) for k in a)
+    v = video_cloud(b, "DNS", tmp_path / "v10.mp4", fps=2, unit="L")
+    t = video_trajectories(b, "DNS", tmp_path / "v5.mp4", fps=2, unit="L")
+    assert v["frames"] == frames and t["frames"] == frames
