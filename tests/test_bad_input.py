@@ -66,6 +66,10 @@ CASES = [
     (COMPARE, ["compare.naive_shape_factors=[nan]"], "shape_factor"),
     (COMPARE, ["compare.strategies=[minimal]", "compare.minimal_fits=[{tmp}/nowhere]"],
      "{tmp}/nowhere"),
+    (COMPARE, ["compare.strategies=[sto]", "compare.minimal_fits=[{tmp}/fit]"],
+     "compare.minimal_fits"),
+    (COMPARE, ["compare.strategies=[minimal]", "compare.minimal_fits=[{tmp}/nanfit]"],
+     "{tmp}/nanfit"),
     # incomplete DNS store (item 7)
     (EVAL, ["flow=dns_replay", "flow.path={tmp}/incomplete.zarr"], "flow.allow_incomplete"),
     (EVAL, ["flow=dns_replay", "flow.path={tmp}/nowhere.zarr"], "flow.path"),
@@ -99,6 +103,10 @@ def _fill(text: str, tmp: Path) -> str:
 def _fixtures(tmp: Path) -> None:
     (tmp / "policy.txt").write_text("not a policy\n")
     DNSStoreWriter.create(tmp / "incomplete.zarr", {"n": 8})  # status "created"
+    for name, c1 in (("fit", 1.0), ("nanfit", "NaN")):
+        (tmp / name).mkdir()
+        (tmp / name / "fit.json").write_text(json.dumps(
+            {"coefficients": {"c1": c1, "c2": 0.0, "c3": 0.0, "c4": 0.0}}))
     (tmp / "foreign").mkdir()
     (tmp / "foreign" / "keep.txt").write_text("precious")
     run = tmp / "sweep" / "0"

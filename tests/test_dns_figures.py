@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import json
 import math
+from dataclasses import replace
 
 import numpy as np
 import pytest
@@ -39,14 +40,15 @@ def test_transfer_summary_pairs_each_flow_with_sto(tmp_path):
     per = dfig.read_transfer(tmp_path)
     assert per["realisation"].tolist() == [0, 0, 1, 1]
     s = dfig.transfer_summary(per)
-    ratios = np.array([1.2, 1.4, 1.0, 1.2])
-    assert s["policy(pretrained/ku10)"]["ratio"] == pytest.approx(ratios.mean())
-    assert s["policy(pretrained/ku10)"]["ratio_std"] == pytest.approx(ratios.std(ddof=1))
-    assert s["policy(pretrained/ku10)"]["ratio_realisations"] == pytest.approx([4.0 / 3, 1.1])
+    smart = s["policy(pretrained/ku10)"]
+    assert smart["ratio"] == pytest.approx(6.2 / 5)  # the ratio of the means, paired
+    assert smart["ratio_realisations"] == pytest.approx([4.0 / 3, 1.1])
+    assert smart["ratio_realisation_std"] == pytest.approx(np.std([4.0 / 3, 1.1], ddof=1))
     assert s["naive(+0.98)"]["ratio"] == pytest.approx(0.5)
-    assert s["sto"]["ratio_std"] == 0 and s["sto"]["n_realisations"] == 2
-    assert dfig._ku_of("policy(pretrained/ku1e7)") == 1e7
-    assert dfig._ku_of("minimal(ku0.1)") == 0.1 and dfig._ku_of("policy(pretrained/dns)") is None
+    assert s["sto"]["ratio_realisation_std"] == 0 and s["sto"]["n_realisations"] == 2
+    assert dfig.ku_of("policy(pretrained/ku1e7)") == 1e7
+    assert dfig.ku_of("minimal(ku0.1)") == 0.1 and dfig.ku_of("policy(pretrained/dns)") is None
+    assert dfig.ku_of("policy(runs/ku10_seed0)") is None and dfig.ku_of("minimal(ku1_0)") is None
 
 
 def test_figure_draws_every_panel_from_tiny_records(tmp_path):
@@ -58,19 +60,20 @@ def test_figure_draws_every_panel_from_tiny_records(tmp_path):
            "vorticity": rng.normal(size=(3, 16, 16))}
     z = np.linspace(-5, 5, 21)
     pdfs = {"omega": {"z": z.tolist(), "pdf": np.exp(-z**2 / 2).tolist()}}
-    summary = {"sto": {"ratio": 1.0, "ratio_std": 0.0, "n_flows": 4, "n_realisations": 2},
-               "policy(pretrained/ku10)": {"ratio": 1.1, "ratio_std": 0.05, "n_flows": 4,
-                                           "n_realisations": 2},
-               "policy(pretrained/ku1)": {"ratio": 0.9, "ratio_std": 0.05, "n_flows": 4,
-                                          "n_realisations": 2},
-               "policy(pretrained/dns)": {"ratio": 1.2, "ratio_std": 0.04, "n_flows": 4,
-                                          "n_realisations": 2}}
+    def row(ratio, err):
+        return {"ratio": ratio, "ratio_realisation_std": err, "n_flows": 4, "n_realisations": 2}
+
+    summary = {"sto": row(1.0, 0.0), "policy(pretrained/ku10)": row(1.1, 0.05),
+               "policy(pretrained/ku1)": row(0.9, 0.05), "policy(pretrained/dns)": row(1.2, 0.04),
+               "naive(+0.98)": row(0.6, 0.02), "policy(runs/other)": row(1.0, 0.1)}
     out = dfig.fig_dns_flow(rec, pdfs, summary, tmp_path / "d.png", glyph_window=4.0,
                             glyph_every=1.0)
     assert (tmp_path / "d.png").stat().st_size > 10_000
     assert out["a"]["window_decisions"] == 40 and out["a"]["glyphs"] == 4  # t = 0, 1, 2, 3
     assert out["b"] == ["omega"]
     assert out["c"]["smart"] == [[1.0, 0.9, 0.05], [10.0, 1.1, 0.05]]
+    assert out["c"]["lines"] == {"policy(pretrained/dns)": 1.2, "naive(+0.98)": 0.6}
+    assert out["c"]["not_drawn"] == ["policy(runs/other)"]
     none = dfig.fig_dns_flow(None, None, None, tmp_path / "e.png")
     assert none == {} and (tmp_path / "e.png").exists()
 
@@ -96,20 +99,24 @@ def test_replay_record_is_made_once_from_the_store_and_read_after(tmp_path):
     dns = DNSFiguresConfig(store=store, record=tmp_path / "rec" / "record.npz",
                            transfer=tmp_path / "none", checks=tmp_path / "none.json",
                            policy="naive(-0.5)", n_swimmers=5, n_traj=2, decode_n=None)
-    a = dfig.dns_record(cfg, dns)
-    assert dns.record.exists()
+    missing, why = dfig.dns_record(cfg, replace(dns, policy="nowhere/policy.pt"))
+    assert missing is None and "dns.policy" in why and not dns.record.exists()
+    a, why = dfig.dns_record(cfg, dns)
+    assert dns.record.exists() and why == ""
     frames = 1 + 10 // dfig.FRAME_EVERY  # every FRAME_EVERY decisions of 10
     assert a["cloud"].shape == (3, 5, frames, 2) and a["smart_path"].shape == (2, 11, 2)
     assert a["smart_Lambda"].shape == (2, 10) and np.allclose(a["smart_Lambda"], -0.5)
     assert np.all(a["cloud"][:, :, 0] == 0) and float(a["box"]) == 1.0
     final = a["smart_path"][:, -1] - a["smart_path"][:, 0]
     assert np.allclose(a["traj_abs"][0, :, 0], a["smart_path"][:, 0])
-    dist = np.linalg.norm(final, axis=-1) * float(a["box_dns"])
+    dist = np.linalg.norm(final, axis=-1)  # box units, as reference_distance
     assert dist / float(a["reference_distance"]) == pytest.approx(a["R_hat"][0, :2], rel=1e-4)
     assert a["vorticity"].shape[0] == 2 and math.isclose(float(a["time"][-1]), 1.0)
     store.rename(tmp_path / "gone.zarr")
-    b = dfig.dns_record(cfg, dns)
+    b, _ = dfig.dns_record(cfg, dns)
     assert all(np.array_equal(a[k], b[k]) for k in a)
+    other, why = dfig.dns_record(cfg, replace(dns, n_swimmers=6))  # made with other inputs
+    assert other is None and "n_swimmers" in why
     v = video_cloud(b, "DNS", tmp_path / "v10.mp4", fps=2, unit="L")
     t = video_trajectories(b, "DNS", tmp_path / "v5.mp4", fps=2, unit="L")
     assert v["frames"] == frames and t["frames"] == frames

@@ -9,32 +9,39 @@ r"""Fig. ``dnsFlow`` and the DNS videos (5, 10) from committed records (``swimrl
   over the stored runs, from ``dns_checks.json`` of ``swimrl-dns-plots``;
 * (c) the transfer: ``R_hat / R_hat_STO`` of the policies trained at each Ku and of the
   minimal model with the coefficients fitted at each Ku, against that Ku; the DNS-trained
-  policy and naive as horizontal lines. Ratios are paired per flow (one flow = one held-out
-  realisation and start time, all strategies on the same swimmers' initial conditions); the
-  bars are the standard deviation of the per-flow ratio over flows, i.e. over independent
-  realisations and start points (the paper's convention).
+  policy (``dns.policy``) and naive as horizontal lines. All strategies run on the same
+  flows (a flow = one held-out realisation and start time) and the same swimmers' initial
+  conditions; the point is the paired ratio of the means over all flows, the bars the
+  standard deviation over independent realisations of each realisation's own ratio (start
+  times of one stored run overlap, so their spread would understate it).
 
-The replay record (``record``) is made once from a stored run when that run exists
+The replay record (``record``) is made once from a finished stored run when that run exists
 (``swimrl-dns seed=...``; the stores are too large to commit) and is then read from the
-committed ``.npz``: a fresh clone draws the figure and the videos without the store.
-Positions are in units of the DNS box ``L``.
+committed ``.npz``: a fresh clone draws the figure and the videos without the store. The
+record keeps what it was made with (policy, store, sizes, seed, episode); a record made with
+other settings is not used (delete it to remake it). Lengths are in units of the DNS box
+``L`` (``reference_distance`` too).
 """
 
 from __future__ import annotations
 
+import dataclasses
 import json
 import math
+import re
 from pathlib import Path
 
 import numpy as np
 
 from swimrl.evaluation.rollout import EvalSetup, EvalSizes
+from swimrl.evaluation.statistics import paired_ratio
 from swimrl.flows.build import StoredRunSpec
+from swimrl.flows.dns.store import store_status
+from swimrl.policies.files import resolve_policy_file
 
 from .figures import (
     COLORS,
     FRAME_EVERY,
-    STRATEGIES,
     DNSFiguresConfig,
     FiguresConfig,
     _plt,
@@ -44,8 +51,8 @@ from .figures import (
 
 #: Largest aspect ratio drawn for a glyph (the swimmers' own reach ~10 at |Lambda| = 0.98).
 GLYPH_ASPECT_MAX = 4.0
-#: The strategies' order in a record (smart = the configured policy).
-RECORD_ORDER = STRATEGIES
+#: ``ku<number>`` at the end of a policy or fit label: the Ku it was trained or fitted at.
+KU_LABEL = re.compile(r"(?:^|/)ku((?:\d+\.?\d*|\.\d+)(?:e[+-]?\d+)?)$")
 
 
 def spheroid_aspect(shape_factor: np.ndarray) -> np.ndarray:
@@ -56,6 +63,13 @@ def spheroid_aspect(shape_factor: np.ndarray) -> np.ndarray:
 
 
 # -- the replay record ---------------------------------------------------------------------------
+def record_inputs(cfg: FiguresConfig, dns: DNSFiguresConfig) -> dict[str, str]:
+    """What a replay record depends on, as strings (kept in the record, compared on load)."""
+    return {"policy": dns.policy, "store": Path(dns.store).name, "n_swimmers": str(dns.n_swimmers),
+            "n_traj": str(dns.n_traj), "decode_n": str(dns.decode_n), "seed": str(cfg.seed),
+            "params": json.dumps(dataclasses.asdict(cfg.params), sort_keys=True, default=str)}
+
+
 def make_record(cfg: FiguresConfig, dns: DNSFiguresConfig) -> dict[str, np.ndarray]:
     """Smart (``dns.policy``), naive and STO from the same start time and initial conditions
     in ``dns.store``: clouds and trajectories every :data:`FRAME_EVERY` decisions, the
@@ -80,19 +94,27 @@ def make_record(cfg: FiguresConfig, dns: DNSFiguresConfig) -> dict[str, np.ndarr
         "vorticity": a["vorticity"].astype(np.float16),
         "field_time": a["field_time"],
         "time": a["time"], "tau_K": a["tau_K"], "box": np.asarray(1.0),
-        "reference_distance": a["reference_distance"],
+        "reference_distance": np.asarray(float(a["reference_distance"]) / box),
         "box_dns": np.asarray(box), "update_interval": a["update_interval"],
-        "policy": np.asarray(dns.policy), "store": np.asarray(str(dns.store)),
+        **{f"input_{k}": np.asarray(v) for k, v in record_inputs(cfg, dns).items()},
     }
 
 
-def dns_record(cfg: FiguresConfig, dns: DNSFiguresConfig) -> dict[str, np.ndarray] | None:
-    """The committed record; made from ``dns.store`` first if it is missing and the store
-    exists; None if neither exists."""
+def dns_record(cfg: FiguresConfig, dns: DNSFiguresConfig) -> tuple[dict | None, str]:
+    """``(record, "")``: the committed record, made from ``dns.store`` first if it is missing;
+    ``(None, why)`` when it is missing and cannot be made (no finished store, no policy) or
+    was made with other inputs."""
     path = Path(dns.record)
     if not path.exists():
-        if not Path(dns.store).exists():
-            return None
+        status = store_status(dns.store) if Path(dns.store).exists() else None
+        if status != "complete":
+            return None, (f"no replay record {path} and no finished store {dns.store} "
+                          f"(status {status}) to make it from")
+        try:
+            if "/" in dns.policy:  # a policy file (not a baseline such as naive(-0.5))
+                resolve_policy_file(dns.policy)
+        except (FileNotFoundError, ValueError) as err:
+            return None, f"no replay record {path}: dns.policy={dns.policy!r} ({err})"
         data = make_record(cfg, dns)
         path.parent.mkdir(parents=True, exist_ok=True)
         tmp = path.with_name(path.name + ".tmp.npz")
@@ -100,8 +122,13 @@ def dns_record(cfg: FiguresConfig, dns: DNSFiguresConfig) -> dict[str, np.ndarra
         tmp.replace(path)
     with np.load(path) as z:
         out = {k: z[k] for k in z.files}
+    made = {k[6:]: str(v) for k, v in out.items() if k.startswith("input_")}
+    differ = sorted(k for k, v in record_inputs(cfg, dns).items() if made.get(k) != v)
+    if differ:
+        return None, (f"{path} was made with other {', '.join(differ)} (delete it to remake it "
+                      "from the store)")
     out["vorticity"] = out["vorticity"].astype(np.float32)
-    return out
+    return out, ""
 
 
 # -- (c) the transfer ----------------------------------------------------------------------------
@@ -126,36 +153,37 @@ def read_transfer(root: Path) -> dict[str, np.ndarray]:
     return out
 
 
+def _std(x: np.ndarray) -> float:
+    return float(np.std(x, ddof=1)) if np.size(x) > 1 else math.nan
+
+
 def transfer_summary(per: dict[str, np.ndarray], reference: str = "sto") -> dict[str, dict]:
-    """Per label: mean ``R_hat`` over flows, the mean per-flow ratio to ``reference`` and its
-    standard deviation over flows (realisations x start points), and the same ratio over
-    realisations only (their means; std over realisations)."""
+    """Per label: ``R_hat`` (mean and std over flows), the paired ratio of its mean to the
+    ``reference``'s over all flows with its delta-method SEM (``ratio``, ``ratio_sem``, as
+    ``swimrl-compare``), each realisation's own paired ratio and their std over
+    realisations (``ratio_realisation_std``: the bars of Fig. dnsFlow(c))."""
     ref, real = per[reference], per["realisation"]
     out = {}
     for label, r in per.items():
         if label == "realisation":
             continue
-        ratio = r / ref
+        ratio, sem = paired_ratio(r, ref)
         by_real = np.array([r[real == i].mean() / ref[real == i].mean()
                             for i in np.unique(real)])
-        out[label] = {"R_hat": float(r.mean()), "R_hat_std": float(r.std(ddof=1)),
-                      "ratio": float(ratio.mean()), "ratio_std": float(ratio.std(ddof=1)),
+        out[label] = {"R_hat": float(r.mean()), "R_hat_std": _std(r),
+                      "ratio": ratio, "ratio_sem": sem,
                       "ratio_realisations": by_real.tolist(),
-                      "ratio_realisation_std": float(by_real.std(ddof=1))
-                      if len(by_real) > 1 else math.nan,
+                      "ratio_realisation_std": _std(by_real),
                       "n_flows": int(r.size), "n_realisations": int(len(by_real))}
     return out
 
 
-def _ku_of(label: str) -> float | None:
-    """Ku of ``policy(.../ku10)`` or ``minimal(ku1e7)``; None for other labels."""
-    inner = label[label.find("(") + 1:-1].rstrip("/").split("/")[-1]
-    if inner.startswith("ku"):
-        try:
-            return float(inner[2:])
-        except ValueError:
-            return None
-    return None
+def ku_of(label: str) -> float | None:
+    """Ku of ``policy(.../ku10)`` or ``minimal(ku1e7)`` (the label ends in ``ku<number>``);
+    None for other labels."""
+    inner = label[label.find("(") + 1:].removesuffix(")").rstrip("/")
+    m = KU_LABEL.search(inner)
+    return float(m.group(1)) if m else None
 
 
 # -- the figure ----------------------------------------------------------------------------------
@@ -177,7 +205,7 @@ def _glyphs(ax, path: np.ndarray, theta: np.ndarray, lam: np.ndarray, every: int
 
 def fig_dns_flow(rec: dict | None, pdfs: dict | None, transfer: dict[str, dict] | None,
                  path: Path, glyph_window: float = 20.0, glyph_every: float = 2.0,
-                 title: str = "") -> dict:
+                 title: str = "", dns_policy: str = "pretrained/dns") -> dict:
     """(a) vorticity, trajectory and glyphs; (b) PDFs; (c) transfer ratios. Panels whose
     record is None say so instead."""
     plt = _plt()
@@ -189,8 +217,9 @@ def fig_dns_flow(rec: dict | None, pdfs: dict | None, transfer: dict[str, dict] 
         x = rec["smart_path"][0, : n_win + 1]
         vort = rec["vorticity"][0]
         m = vort.shape[0]
-        shift = np.floor(x.min(0))  # the tile holding the start
-        reps = (np.ceil(x.max(0)) - shift).astype(int).clip(min=1)
+        pad = 0.15  # box units around the path
+        shift = np.floor(x.min(0) - pad)  # whole tiles covering the path and the margin
+        reps = (np.ceil(x.max(0) + pad) - shift).astype(int).clip(min=1)
         extent = [shift[0], shift[0] + reps[0], shift[1], shift[1] + reps[1]]
         vmax = float(np.abs(rec["vorticity"]).max())
         im = a.imshow(np.tile(vort, (reps[1], reps[0])), origin="lower", extent=extent,
@@ -199,8 +228,8 @@ def fig_dns_flow(rec: dict | None, pdfs: dict | None, transfer: dict[str, dict] 
         a.plot(x[:, 0], x[:, 1], color="k", lw=1.0, zorder=3)
         g = _glyphs(a, x, rec["smart_theta"][0, :n_win], rec["smart_Lambda"][0, :n_win],
                     max(1, int(round(glyph_every / tau_u))), 0.06)
-        a.set_xlim(x[:, 0].min() - 0.15, x[:, 0].max() + 0.15)
-        a.set_ylim(x[:, 1].min() - 0.15, x[:, 1].max() + 0.15)
+        a.set_xlim(x[:, 0].min() - pad, x[:, 0].max() + pad)
+        a.set_ylim(x[:, 1].min() - pad, x[:, 1].max() + pad)
         a.set_aspect("equal")
         a.set_xlabel(r"$x/L$")
         a.set_ylabel(r"$y/L$")
@@ -226,7 +255,7 @@ def fig_dns_flow(rec: dict | None, pdfs: dict | None, transfer: dict[str, dict] 
         b.text(0.5, 0.5, "no pooled PDFs (swimrl-dns-plots)", ha="center", transform=b.transAxes)
     b.set_title("(b) gradient PDFs, pooled over the stored runs", fontsize=8)
     if transfer:
-        drawn["c"] = _draw_transfer(c, transfer)
+        drawn["c"] = _draw_transfer(c, transfer, f"policy({dns_policy})")
     else:
         c.text(0.5, 0.5, "no transfer records", ha="center", transform=c.transAxes)
     fig.suptitle(title, fontsize=8)
@@ -235,57 +264,69 @@ def fig_dns_flow(rec: dict | None, pdfs: dict | None, transfer: dict[str, dict] 
     return drawn
 
 
-def _draw_transfer(ax, summary: dict[str, dict]) -> dict:
+def _draw_transfer(ax, summary: dict[str, dict], dns_label: str) -> dict:
     series: dict[str, list[tuple[float, float, float]]] = {"smart": [], "minimal": []}
-    flat = {}
+    lines, other = {}, []
     for label, s in summary.items():
-        ku = _ku_of(label)
-        kind = "minimal" if label.startswith("minimal") else "smart"
-        if ku is not None:
-            series[kind].append((ku, s["ratio"], s["ratio_std"]))
-        else:
-            flat[label] = s
-    styles = {"smart": dict(color=COLORS["smart"], marker="o", ls="-"),
-              "minimal": dict(color="tab:purple", marker="s", ls="--")}
+        ku = ku_of(label)
+        err = s["ratio_realisation_std"]
+        if ku is not None and label.startswith(("policy", "minimal")):
+            kind = "minimal" if label.startswith("minimal") else "smart"
+            series[kind].append((ku, s["ratio"], 0.0 if math.isnan(err) else err))
+        elif label == dns_label or label.startswith(("naive", "minimal")):
+            lines[label] = s
+        elif label != "sto":
+            other.append(label)
+    styles = {"smart": dict(color=COLORS["smart"], marker="o", ls="-",
+                            label="smart, trained at Ku"),
+              "minimal": dict(color="tab:purple", marker="s", ls="--",
+                              label="minimal model, fitted at Ku")}
     for kind, pts in series.items():
         if pts:
             k, r, e = np.array(sorted(pts)).T
-            ax.errorbar(k, r, yerr=e, capsize=3, label=f"{kind} (trained at Ku)"
-                        if kind == "smart" else "minimal model (fitted at Ku)", **styles[kind])
+            ax.errorbar(k, r, yerr=e, capsize=3, **styles[kind])
     ax.axhline(1.0, color=COLORS["STO"], lw=1.5, label="STO")
-    for label, s in flat.items():
-        if label.startswith("naive"):
+    for label, s in lines.items():
+        if label == dns_label:
+            ax.axhline(s["ratio"], color="k", ls=":", lw=1.5, label="trained in the DNS")
+            err = s["ratio_realisation_std"]
+            if not math.isnan(err):
+                ax.axhspan(s["ratio"] - err, s["ratio"] + err, color="0.88", zorder=0)
+        elif label.startswith("naive"):
             ax.axhline(s["ratio"], color=COLORS["naive"], lw=1, label=label)
-        elif label.startswith("policy"):
-            ax.axhline(s["ratio"], color="k", ls=":", lw=1.5, label=f"DNS-trained {label[7:-1]}")
-            ax.axhspan(s["ratio"] - s["ratio_std"], s["ratio"] + s["ratio_std"], color="0.85",
-                       zorder=0)
+        else:
+            ax.axhline(s["ratio"], color="tab:purple", lw=1, ls="-.", label=label)
     ax.set_xscale("log")
     ax.set_xlabel("Ku of training")
     ax.set_ylabel(r"$\hat R / \hat R_{\rm STO}$ in the DNS")
     n = next(iter(summary.values()))
-    ax.set_title(f"(c) transfer: {n['n_realisations']} held-out realisations, "
-                 f"{n['n_flows']} flows; bars: std over flows", fontsize=8)
+    ax.set_title(f"(c) transfer: {n['n_realisations']} held-out realisations, {n['n_flows']} "
+                 "flows; bars: std over realisations", fontsize=8)
     ax.legend(fontsize=6, loc="lower right")
-    return {k: [list(p) for p in sorted(v)] for k, v in series.items()}
+    return {**{k: [list(p) for p in sorted(v)] for k, v in series.items()},
+            "lines": {k: v["ratio"] for k, v in lines.items()}, "not_drawn": other}
 
 
 def build_dns_flow(cfg: FiguresConfig, dns: DNSFiguresConfig) -> dict:
     """Fig. dnsFlow from the committed records (the replay record made first if missing and
-    the store is there)."""
-    rec = dns_record(cfg, dns)
+    a finished store is there)."""
+    rec, why = dns_record(cfg, dns)
     pdfs = None
     if Path(dns.checks).exists():
         pdfs = json.loads(Path(dns.checks).read_text()).get("pooled_pdfs")
     per = read_transfer(dns.transfer) if Path(dns.transfer).exists() else {}
     summary = transfer_summary(per) if per else None
+    title = "no replay record"
+    if rec is not None:
+        title = (f"(a) held-out DNS run {rec['input_store']}, smart = {rec['input_policy']}; "
+                 f"(c) smart = the shipped policies, minimal = fits to them")
     out = fig_dns_flow(rec, pdfs, summary, cfg.out / "dnsFlow.png", dns.glyph_window,
-                       dns.glyph_every,
-                       f"held-out DNS realisation {Path(str(rec['store'])).name if rec else '-'}"
-                       f", smart = {dns.policy}, T = {cfg.params.duration:g} $\\tau_K$")
+                       dns.glyph_every, title, dns.policy)
     if summary:
         out["transfer"] = summary
-    missing = [k for k, v in (("record", rec), ("pdfs", pdfs), ("transfer", summary)) if not v]
+    missing = [why] if why else []
+    missing += [f"no pooled_pdfs in {dns.checks}"] if not pdfs else []
+    missing += [f"no comparison.json under {dns.transfer}"] if not summary else []
     if missing:
-        out["pending"] = "missing: " + ", ".join(missing)
+        out["pending"] = "; ".join(missing)
     return out

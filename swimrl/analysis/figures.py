@@ -682,9 +682,10 @@ def build_videos(cfg: FiguresConfig) -> dict:
         rec = ku_record(cfg, kubo)
         out[i + 1] = video_trajectories(rec, kubo, where / f"video{i + 1}_{ku_name(kubo)}.mp4")
         out[i + 6] = video_cloud(rec, kubo, where / f"video{i + 6}_{ku_name(kubo)}_cloud.mp4")
-    rec = None if cfg.dns is None else dns_record(cfg, cfg.dns)
+    rec, why = (None, "no dns.* records configured") if cfg.dns is None else dns_record(cfg,
+                                                                                      cfg.dns)
     if rec is None:
-        out["pending"] = "videos 5, 10: no DNS replay record (dns.record) and no store"
+        out["pending"] = f"videos 5, 10: {why}"
     else:
         out[5] = video_trajectories(rec, "DNS", where / "video5_dns.mp4", unit="L")
         out[10] = video_cloud(rec, "DNS", where / "video10_dns_cloud.mp4", unit="L")

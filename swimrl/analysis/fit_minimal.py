@@ -19,6 +19,7 @@ the command that evaluates the fitted model:
 from __future__ import annotations
 
 import json
+import math
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -87,7 +88,10 @@ def read_coefficients(path: str | Path) -> tuple[str, tuple[float, ...]]:
                           "fit.json (or its run directory) of swimrl-fit-minimal")
     try:
         coeffs = json.loads(path.read_text())["coefficients"]
-        return path.parent.name, tuple(float(coeffs[k]) for k in ("c1", "c2", "c3", "c4"))
+        values = tuple(float(coeffs[k]) for k in ("c1", "c2", "c3", "c4"))
+        if not all(map(math.isfinite, values)):
+            raise ValueError(f"non-finite coefficients {values}")
+        return path.parent.name, values
     except (ValueError, KeyError, TypeError) as err:
         raise ConfigError(f"compare.minimal_fits has {str(path)!r}: no coefficients c1..c4 "
                           f"({err}); allowed the fit.json of swimrl-fit-minimal") from None

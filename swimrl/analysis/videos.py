@@ -31,7 +31,7 @@ def _writer(fps: int):
                         extra_args=["-pix_fmt", "yuv420p"])
 
 
-def _distance_inset(fig, ax, t: np.ndarray, dist: np.ndarray):
+def _distance_inset(fig, ax, t: np.ndarray, dist: np.ndarray, unit: str):
     """Inset of ``dist`` ``(3, frames)`` against ``t``; returns the moving markers."""
     ins = ax.inset_axes([0.02, 0.72, 0.28, 0.26])
     marks = []
@@ -40,7 +40,7 @@ def _distance_inset(fig, ax, t: np.ndarray, dist: np.ndarray):
         (m,) = ins.plot(t[:1], dist[j, :1], "o", color=COLORS[name], ms=3)
         marks.append(m)
     ins.set_xlabel(r"$t/\tau_K$", fontsize=6, labelpad=0)
-    ins.set_ylabel(r"$|x-x_0|/\ell_f$", fontsize=6, labelpad=0)
+    ins.set_ylabel(f"$|x-x_0|/{unit}$", fontsize=6, labelpad=0)
     ins.tick_params(labelsize=5)
     ins.patch.set_alpha(0.85)
     return marks
@@ -60,7 +60,7 @@ def video_trajectories(rec: dict, flow: float | str, path: Path, fps: int = 8,
     n = min(traj.shape[2], vort.shape[0])
     t = rec["time"][:: max(1, (rec["time"].size - 1) // max(1, n - 1))][:n]
     pts = traj[:, :, :n].reshape(-1, 2)
-    lo, hi = pts.min(0) - 1.0, pts.max(0) + 1.0
+    lo, hi = pts.min(0) - 0.1 * box, pts.max(0) + 0.1 * box  # 1 l_f in the stochastic box
     start = np.floor(lo / box) * box
     reps = np.ceil((hi - start) / box).astype(int)
     extent = [start[0], start[0] + reps[0] * box, start[1], start[1] + reps[1] * box]
@@ -79,7 +79,7 @@ def video_trajectories(rec: dict, flow: float | str, path: Path, fps: int = 8,
     ax.set_ylabel(f"$y/{unit}$")
     ax.legend(fontsize=7, loc="lower right")
     fig.colorbar(im, ax=ax, shrink=0.7, label=r"$\omega\tau_K$")
-    marks = _distance_inset(fig, ax, t, dist)
+    marks = _distance_inset(fig, ax, t, dist, unit)
     title = ax.set_title("", fontsize=9)
     fig.tight_layout()
 
@@ -116,7 +116,7 @@ def video_cloud(rec: dict, flow: float | str, path: Path, fps: int = 8,
     ax.set_xlabel(f"$\\Delta x/{unit}$")
     ax.set_ylabel(f"$\\Delta y/{unit}$")
     ax.legend(fontsize=7, loc="lower right", markerscale=4)
-    marks = _distance_inset(fig, ax, t, dist)
+    marks = _distance_inset(fig, ax, t, dist, unit)
     title = ax.set_title("", fontsize=9)
     fig.tight_layout()
 

@@ -54,6 +54,13 @@ def strategy_variants(
     ``minimal_fits`` where given, and ``policy`` expands over ``policies`` (run dirs,
     checkpoints, ``pretrained/NAME``)."""
     allowed = "a list of 'naive', 'sto', 'minimal', 'policy'"
+    labels = [label for label, _ in minimal_fits]
+    if minimal_fits and "minimal" not in strategies:
+        raise ConfigError(f"compare.minimal_fits has {len(labels)} fits but compare.strategies "
+                          f"{list(strategies)} has no 'minimal': allowed only with 'minimal'")
+    if len(set(labels)) < len(labels):
+        raise ConfigError(f"compare.minimal_fits has run directories of the same name {labels}: "
+                          "allowed fits whose directories have distinct names (the row labels)")
     out: list[Variant] = []
     for name in strategies:
         if name == "naive":

@@ -32,9 +32,10 @@ Band limit (speed, same draws): ``sqrt(P_k)`` falls as ``exp(-k^2 ell^2 / 4)``, 
 modes ``|m_x|, |m_y| <= K`` carry the fields (:func:`band_limit`: every dropped mode has
 ``sqrt(P_k) max(1, k^2 ell^2) <= 1e-13`` of the peak; ``K = 18`` of 200 at the default
 ``L = 10``, ``n = 400``). :class:`BandLimitedSynthesis` evaluates the same
-``IFFT(m_k sqrt(P) FFT(w))`` as direct sums over those modes (dense float64 products
-instead of full FFTs): the same white field ``w``, hence the same realisation, to float64
-round-off plus the dropped ``1e-13``; several times faster at the default grid.
+``IFFT(m_k sqrt(P) FFT(w))`` as direct sums over those modes (dense float64 products, the
+last one in the flow's dtype, instead of full FFTs): the same white field ``w``, hence the
+same realisation, to round-off (float64 plus the dropped ``1e-13``; a few float32 ulps for
+float32 flows); several times faster at the default grid.
 
 OU update (exact for any step): ``c(t+dt) = c(t) e^{-dt/tau_f} + sqrt((1 - e^{-2 dt/tau_f})/M) xi``,
 ``xi ~ N(0, 1)``; ``c(0)`` is drawn from the stationary law ``N(0, 1/M)``.
@@ -142,8 +143,9 @@ class BandLimitedSynthesis:
     e^{2 pi i m.j / n}``,
 
     with the channel multipliers ``mult = (i k_y, -i k_x, -k_x k_y, (k_x^2 - k_y^2)/2,
-    k_x^2 + k_y^2)`` of :func:`stream_function_channels`. All in float64; fields are
-    indexed ``[y, x]`` as :meth:`PeriodicGrid.wavenumbers`.
+    k_x^2 + k_y^2)`` of :func:`stream_function_channels`. In float64 up to the last sum (in
+    ``dtype``, see :meth:`__call__`); fields are indexed ``[y, x]`` as
+    :meth:`PeriodicGrid.wavenumbers`.
     """
 
     def __init__(self, grid: PeriodicGrid, sqrt_spectrum: torch.Tensor, k_keep: int,
