@@ -186,6 +186,16 @@ def test_checks_across_independent_runs(tmp_path):
     for curve in checks["pooled_pdfs"].values():  # the drawn PDFs, for Fig. dnsFlow(b)
         z, pdf = np.asarray(curve["z"]), np.asarray(curve["pdf"])
         assert (pdf * (z[1] - z[0])).sum() == pytest.approx(1.0, abs=0.01)
+    # runs are added one at a time from their records: the same checks without the stores
+    again = main([str(paths[0]), "--checks", "--out", str(tmp_path / "one"), "--snapshots", "3",
+                  "--fit", "3", "8"])
+    assert [r["seed"] for r in again["runs"]] == [1]
+    (tmp_path / "one" / "runs" / f"{paths[1].stem}.json").write_text(
+        (tmp_path / "checks" / "runs" / f"{paths[1].stem}.json").read_text())
+    paths[1].rename(tmp_path / "gone.zarr")
+    both = main([str(paths[0]), "--checks", "--out", str(tmp_path / "one"), "--snapshots", "3",
+                 "--fit", "3", "8"])
+    assert both["runs"] == checks["runs"] and both["pooled_pdfs"] == checks["pooled_pdfs"]
 
 
 def test_finished_store_extends_to_the_longer_run(tmp_path):

@@ -405,7 +405,9 @@ def test_training_in_a_stored_dns_run(compose_cfg, tmp_path):
 def test_resume_a_checkpoint_written_before_the_key_renames(compose_cfg, tmp_path):
     """``checkpoints/last.pt`` of a run stopped after update 2 by the code before the config
     keys were renamed (``episode.shape_factor_max`` then): resuming it with the same settings
-    finishes the run with exactly the held-out R_hat that code reached."""
+    finishes the run with the held-out R_hat that code reached, to float32 round-off (since
+    then the flow redraw sums over the retained modes instead of full FFTs: the same draws,
+    fields equal to a few float32 ulps, tests/test_flow_stochastic.py)."""
     data = Path(__file__).parent / "data" / "legacy_checkpoint"
     expected = json.loads((data / "expected.json").read_text())
     assert load_file(data / "last.pt")["config"]["episode"]["shape_factor_max"] == 0.95
@@ -419,7 +421,7 @@ def test_resume_a_checkpoint_written_before_the_key_renames(compose_cfg, tmp_pat
                           name="train"), tmp_path)
     metrics = train(compose_cfg([*overrides, "resume=true"], name="train"), tmp_path)
     assert metrics["training"]["updates"] == 4
-    assert metrics["per_flow"] == expected["per_flow"]
+    assert metrics["per_flow"] == pytest.approx(expected["per_flow"], rel=1e-5, abs=0)
 
 
 def _one_minibatch(trainer: PPOTrainer):

@@ -20,7 +20,11 @@ With several stores (independent realisations, e.g. ``swimrl-dns -m seed=...``),
 * ``dns_pdfs_all.png``: the PDFs of ``omega``, ``S_xx``, ``S_xy`` pooled over all runs;
 * ``dns_checks.json``: per run the spectral slope, ``u_rms``, ``tau_K``, their relative
   spread and drift (second half of the window against the first) and ``k_max l_nu``, and
-  whether every run has ``k_max l_nu >= 1``.
+  whether every run has ``k_max l_nu >= 1``; the pooled PDF curves (Fig. dnsFlow(b)).
+
+``DIR/runs/<store>.json`` keeps each run's record (summary, window series, PDF curves), and
+the checks are drawn from every record there: ``swimrl-dns-plots C.zarr --checks --out DIR``
+adds a run to the earlier ones without their stores.
 """
 
 from __future__ import annotations
@@ -123,24 +127,43 @@ def gradient_samples(store: DNSStore, idx: np.ndarray, chunk: int = 8) -> dict[s
     return {k: np.concatenate(v) for k, v in parts.items()}
 
 
-def plot_pdfs(samples: dict[str, np.ndarray], out: Path,
-              curves: dict[str, dict[str, list[float]]] | None = None
-              ) -> dict[str, dict[str, float]]:
-    """Semi-log PDFs of ``x / std(x)`` for each channel and the Gaussian (paper Fig. 6b);
-    returns the moments, and puts the drawn ``{"z", "pdf"}`` of each channel into ``curves``
-    when given."""
-    fig, ax = plt.subplots(figsize=(5.5, 4))
-    stats = {}
+def pdf_curves(samples: dict[str, np.ndarray]) -> dict[str, dict]:
+    """Per channel the PDF of ``(x - <x>) / std(x)`` on 121 bins over ``[-12, 12]``
+    (``z``, ``pdf``), the sample ``count`` and the standardised moments."""
+    out = {}
     for name, x in samples.items():
         t = torch.from_numpy(x)
         z, pdf, _ = dg.standardized_pdf(t, bins=121, half_width=12.0)
-        stats[name] = dg.moments(t)
-        if curves is not None:
-            curves[name] = {"z": z.tolist(), "pdf": pdf.tolist()}
+        out[name] = {"z": z.tolist(), "pdf": pdf.tolist(), "count": int(x.size),
+                     **dg.moments(t)}
+    return out
+
+
+def pool_pdf_curves(curves: list[dict[str, dict]]) -> dict[str, dict]:
+    """Curves of :func:`pdf_curves` of several runs pooled, each run in its own units: the
+    count-weighted mean of the densities and of the standardised moments."""
+    out = {}
+    for name in curves[0]:
+        parts = [c[name] for c in curves]
+        w = np.array([p["count"] for p in parts], dtype=float)
+        w = w / w.sum()
+        out[name] = {"z": parts[0]["z"],
+                     "pdf": (w @ np.array([p["pdf"] for p in parts])).tolist(),
+                     "count": int(sum(p["count"] for p in parts)),
+                     **{k: float(w @ np.array([p[k] for p in parts]))
+                        for k in ("skewness", "flatness")}}
+    return out
+
+
+def draw_pdfs(curves: dict[str, dict], out: Path) -> None:
+    """Semi-log PDFs of each channel (over its standard deviation) and the Gaussian."""
+    fig, ax = plt.subplots(figsize=(5.5, 4))
+    for name, c in curves.items():
+        z, pdf = np.asarray(c["z"]), np.asarray(c["pdf"])
         keep = pdf > 0
         label = {"omega": r"$\omega$", "S_xx": r"$S_{xx}$", "S_xy": r"$S_{xy}$"}[name]
         ax.semilogy(z[keep], pdf[keep], color=COLOURS[name],
-                    label=f"{label} (F={stats[name]['flatness']:.1f})")
+                    label=f"{label} (F={c['flatness']:.1f})")
     zz = torch.linspace(-6, 6, 241, dtype=torch.float64)
     ax.semilogy(zz, dg.gaussian_pdf(zz), "k--", label="Gaussian")
     ax.set_xlabel(r"$X/\sigma_X$")
@@ -150,7 +173,14 @@ def plot_pdfs(samples: dict[str, np.ndarray], out: Path,
     fig.tight_layout()
     fig.savefig(out, dpi=130)
     plt.close(fig)
-    return stats
+
+
+def plot_pdfs(samples: dict[str, np.ndarray], out: Path) -> dict[str, dict[str, float]]:
+    """Semi-log PDFs of ``x / std(x)`` for each channel and the Gaussian (paper Fig. 6b);
+    returns the moments."""
+    curves = pdf_curves(samples)
+    draw_pdfs(curves, out)
+    return {k: {m: c[m] for m in ("std", "skewness", "flatness")} for k, c in curves.items()}
 
 
 def plot_timeseries(path: Path, store: DNSStore, out: Path) -> None:
@@ -251,32 +281,46 @@ def _spread(x: np.ndarray) -> dict[str, float]:
             "drift": float(x[half:].mean() / x[:half].mean() - 1) if half else math.nan}
 
 
+def run_check(path: Path, n_snapshots: int = 50, fit: tuple[float, float] = (6.0, 40.0)) -> dict:
+    """One run's record for the checks across runs (its own figures go to
+    ``<store>_plots/``): summary, the stored window's ``u_rms(t)``, ``tau_K(t)`` and the
+    standardised PDF curves of its gradients."""
+    summary, samples = _plots_and_samples(path, str(path.with_suffix("")) + "_plots",
+                                          n_snapshots, fit)
+    store = DNSStore(path)
+    series = stored_window_series(path, store)
+    keys = ("store", "n", "n_times", "u_rms", "tau_k", "spectrum_slope", "kmax_l_nu",
+            "store_bytes")
+    return {"summary": {**{k: summary[k] for k in keys}, "seed": store.attrs.get("seed"),
+                        "stored_tau_k": float(series["t"][-1]) if len(series["t"]) else 0.0,
+                        "u_rms_t": _spread(series["u_rms"]), "tau_k_t": _spread(series["tau_k"])},
+            "series": {k: v.tolist() for k, v in series.items()},
+            "stored": {"u_rms": store.u_rms, "tau_k": store.tau_k},
+            "pdfs": pdf_curves(samples)}
+
+
 def check_stores(paths: list[Path], out_dir: Path, n_snapshots: int = 50,
                  fit: tuple[float, float] = (6.0, 40.0)) -> dict:
-    """Each store's summary (:func:`make_plots` into ``<store>_plots``), the stability of
-    ``u_rms`` and ``tau_K`` through each stored window and the PDFs pooled over all runs
-    into ``out_dir``; returns (and writes ``dns_checks.json``) the checks."""
+    """Each store's record (:func:`run_check`) into ``out_dir/runs/<store name>.json``, then
+    the checks across every record there (records of earlier calls included, so runs can be
+    added one at a time): the stability of ``u_rms`` and ``tau_K`` through each stored
+    window, the PDFs pooled over all runs and the resolution of every run, into ``out_dir``;
+    returns (and writes ``dns_checks.json``) the checks."""
     import json
 
     out_dir = Path(out_dir)
-    out_dir.mkdir(parents=True, exist_ok=True)
-    runs, pooled = [], {k: [] for k in PDF_CHANNELS}
-    fig, axs = plt.subplots(1, 2, figsize=(10, 3.6))
+    (out_dir / "runs").mkdir(parents=True, exist_ok=True)
     for path in map(Path, paths):
-        summary, samples = _plots_and_samples(path, str(path.with_suffix("")) + "_plots",
-                                              n_snapshots, fit)
-        store = DNSStore(path)
-        series = stored_window_series(path, store)
-        label = f"seed {store.attrs.get('seed', '?')}"
-        axs[0].plot(series["t"], series["u_rms"] / store.u_rms, lw=0.8, label=label)
-        axs[1].plot(series["t"], series["tau_k"] / store.tau_k, lw=0.8, label=label)
-        for k, v in samples.items():
-            pooled[k].append(v / v.std())  # each run in its own units
-        runs.append({**{k: summary[k] for k in ("store", "n", "n_times", "u_rms", "tau_k",
-                                                 "spectrum_slope", "kmax_l_nu")},
-                     "seed": store.attrs.get("seed"),
-                     "stored_tau_k": float(series["t"][-1]) if len(series["t"]) else 0.0,
-                     "u_rms_t": _spread(series["u_rms"]), "tau_k_t": _spread(series["tau_k"])})
+        rec = run_check(path, n_snapshots, fit)
+        (out_dir / "runs" / f"{path.stem}.json").write_text(json.dumps(rec))
+    records = [json.loads(p.read_text()) for p in sorted((out_dir / "runs").glob("*.json"))]
+    fig, axs = plt.subplots(1, 2, figsize=(10, 3.6))
+    for rec in records:
+        series, label = rec["series"], f"seed {rec['summary']['seed']}"
+        axs[0].plot(series["t"], np.asarray(series["u_rms"]) / rec["stored"]["u_rms"], lw=0.8,
+                    label=label)
+        axs[1].plot(series["t"], np.asarray(series["tau_k"]) / rec["stored"]["tau_k"], lw=0.8,
+                    label=label)
     for ax, name in zip(axs, (r"$u_{\rm rms}(t)/u_{\rm rms}$", r"$\tau_K(t)/\tau_K$"),
                         strict=True):
         ax.axhline(1, color="k", lw=0.6)
@@ -287,12 +331,16 @@ def check_stores(paths: list[Path], out_dir: Path, n_snapshots: int = 50,
     fig.tight_layout()
     fig.savefig(out_dir / "dns_stability.png", dpi=130)
     plt.close(fig)
-    curves: dict[str, dict[str, list[float]]] = {}
-    moments = plot_pdfs({k: np.concatenate(v) for k, v in pooled.items()},
-                        out_dir / "dns_pdfs_all.png", curves)
-    checks = {"runs": runs, "pooled_moments": moments, "pooled_pdfs": curves,
+    pooled = pool_pdf_curves([rec["pdfs"] for rec in records])
+    draw_pdfs(pooled, out_dir / "dns_pdfs_all.png")
+    runs = [rec["summary"] for rec in records]
+    u_rms = [r["u_rms"] for r in runs]
+    checks = {"runs": runs,
+              "pooled_moments": {k: {m: c[m] for m in ("skewness", "flatness")}
+                                 for k, c in pooled.items()},
+              "pooled_pdfs": {k: {"z": c["z"], "pdf": c["pdf"]} for k, c in pooled.items()},
               "all_resolved": all(r["kmax_l_nu"] >= 1 for r in runs),
-              "u_rms_spread_over_runs": float(np.std([r["u_rms"] for r in runs])
-                                              / np.mean([r["u_rms"] for r in runs]))}
+              "u_rms_spread_over_runs": float(np.std(u_rms) / np.mean(u_rms)),
+              "store_bytes_total": int(sum(r["store_bytes"] for r in runs))}
     (out_dir / "dns_checks.json").write_text(json.dumps(checks, indent=1))
     return checks

@@ -15,8 +15,9 @@ from swimrl.analysis.dns_plots import check_stores, make_plots
 def main(argv: list[str] | None = None) -> dict:
     """``swimrl-dns-plots <store> [<store> ...] [--out DIR] [--snapshots M]``; by default the
     figures go next to the store, into ``<store>_plots/`` (never into the repository's
-    ``docs/``); with several stores also the checks across them into ``--out`` (default
-    ``dns_checks/`` next to the first store)."""
+    ``docs/``); with several stores (or ``--checks``) also the checks across them into
+    ``--out`` (default ``dns_checks/`` next to the first store), which keeps each run's
+    record in ``runs/`` so that runs can be added later without their stores."""
     ap = argparse.ArgumentParser(description="Figures of stored swimrl DNS runs")
     ap.add_argument("store", nargs="+")
     ap.add_argument("--out", default=None,
@@ -24,11 +25,14 @@ def main(argv: list[str] | None = None) -> dict:
     ap.add_argument("--snapshots", type=int, default=50, help="snapshots averaged (evenly spaced)")
     ap.add_argument("--fit", type=float, nargs=2, default=(6.0, 40.0),
                     help="k range of the spectral slope fit")
+    ap.add_argument("--checks", action="store_true",
+                    help="add the store(s) to the checks across runs in --out (the default "
+                         "with several stores); runs already recorded there are kept")
     args = ap.parse_args(argv)
     if args.snapshots < 1:
         ap.error(f"--snapshots {args.snapshots}: allowed an integer >= 1")
     torch.set_num_threads(1)
-    if len(args.store) > 1:
+    if len(args.store) > 1 or args.checks:
         out = args.out or str(Path(args.store[0]).parent / "dns_checks")
         summary = check_stores([Path(s) for s in args.store], Path(out), args.snapshots,
                                tuple(args.fit))
