@@ -58,6 +58,10 @@ def test_figure_draws_every_panel_from_tiny_records(tmp_path):
     rec = {"smart_path": path, "smart_theta": rng.uniform(0, 6, (2, n + 1)),
            "smart_Lambda": rng.uniform(-0.98, 0.98, (2, n)), "update_interval": np.asarray(0.1),
            "vorticity": rng.normal(size=(3, 16, 16))}
+    edges = np.linspace(-1, 1, 5)
+    for other in ("n_theta", "omega"):
+        rec[f"map_{other}"] = np.where(np.eye(4) > 0, 0.5, np.nan)
+        rec[f"map_{other}_x"] = rec[f"map_{other}_y"] = edges
     z = np.linspace(-5, 5, 21)
     pdfs = {"omega": {"z": z.tolist(), "pdf": np.exp(-z**2 / 2).tolist()}}
     def row(ratio, err):
@@ -70,7 +74,7 @@ def test_figure_draws_every_panel_from_tiny_records(tmp_path):
                             glyph_every=1.0)
     assert (tmp_path / "d.png").stat().st_size > 10_000
     assert out["a"]["window_decisions"] == 40 and out["a"]["glyphs"] == 4  # t = 0, 1, 2, 3
-    assert out["b"] == ["omega"]
+    assert out["b"] == ["omega"] and out["d"] == 4 and out["e"] == 4
     assert out["c"]["smart"] == [[1.0, 0.9, 0.05], [10.0, 1.1, 0.05]]
     assert out["c"]["lines"] == {"policy(pretrained/dns)": 1.2, "naive(+0.98)": 0.6}
     assert out["c"]["not_drawn"] == ["policy(runs/other)"]
@@ -98,7 +102,8 @@ def test_replay_record_is_made_once_from_the_store_and_read_after(tmp_path):
                         progress=False)
     dns = DNSFiguresConfig(store=store, record=tmp_path / "rec" / "record.npz",
                            transfer=tmp_path / "none", checks=tmp_path / "none.json",
-                           policy="naive(-0.5)", n_swimmers=5, n_traj=2, decode_n=None)
+                           policy="naive(-0.5)", trained="naive(0.5)", n_swimmers=5, n_traj=2,
+                           decode_n=None)
     missing, why = dfig.dns_record(cfg, replace(dns, policy="nowhere/policy.pt"))
     assert missing is None and "dns.policy" in why and not dns.record.exists()
     a, why = dfig.dns_record(cfg, dns)
@@ -106,6 +111,11 @@ def test_replay_record_is_made_once_from_the_store_and_read_after(tmp_path):
     frames = 1 + 10 // dfig.FRAME_EVERY  # every FRAME_EVERY decisions of 10
     assert a["cloud"].shape == (3, 5, frames, 2) and a["smart_path"].shape == (2, 11, 2)
     assert a["smart_Lambda"].shape == (2, 10) and np.allclose(a["smart_Lambda"], -0.5)
+    for other in ("n_theta", "omega"):  # the 'trained' block: constant Lambda = 0.5
+        m = a[f"map_{other}"]
+        assert m.shape == (30, 30) and np.all(np.isnan(m) | np.isclose(m, 0.5))
+        assert a[f"map_{other}_x"].shape == (31,)
+    assert a["R_hat"].shape == (4, 5)
     assert np.all(a["cloud"][:, :, 0] == 0) and float(a["box"]) == 1.0
     final = a["smart_path"][:, -1] - a["smart_path"][:, 0]
     assert np.allclose(a["traj_abs"][0, :, 0], a["smart_path"][:, 0])
@@ -114,7 +124,7 @@ def test_replay_record_is_made_once_from_the_store_and_read_after(tmp_path):
     assert a["vorticity"].shape[0] == 2 and math.isclose(float(a["time"][-1]), 1.0)
     store.rename(tmp_path / "gone.zarr")
     b, _ = dfig.dns_record(cfg, dns)
-    assert all(np.array_equal(a[k], b[k]) for k in a)
+    assert all(np.array_equal(a[k], b[k], equal_nan=a[k].dtype.kind == "f") for k in a)
     other, why = dfig.dns_record(cfg, replace(dns, n_swimmers=6))  # made with other inputs
     assert other is None and "n_swimmers" in why
     v = video_cloud(b, "DNS", tmp_path / "v10.mp4", fps=2, unit="L")

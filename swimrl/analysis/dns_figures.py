@@ -7,6 +7,8 @@ r"""Fig. ``dnsFlow`` and the DNS videos (5, 10) from committed records (``swimrl
   glyphs stay visible; prolate orange, oblate blue;
 * (b) the PDFs of ``omega``, ``S_xx``, ``S_xy`` (each over its standard deviation) pooled
   over the stored runs, from ``dns_checks.json`` of ``swimrl-dns-plots``;
+* (d), (e) ``<Lambda | S_np, n_theta>`` and ``<Lambda | S_np, omega>`` of the DNS-trained
+  policy (``dns.trained``) on the same replay (the paper's (d), (e));
 * (c) the transfer: ``R_hat / R_hat_STO`` of the policies trained at each Ku and of the
   minimal model with the coefficients fitted at each Ku, against that Ku; the DNS-trained
   policy (``dns.policy``) and naive as horizontal lines. All strategies run on the same
@@ -42,12 +44,16 @@ from swimrl.policies.files import resolve_policy_file
 from .figures import (
     COLORS,
     FRAME_EVERY,
+    LABEL,
+    SIGNAL,
     DNSFiguresConfig,
     FiguresConfig,
     _plt,
     _save,
+    _sym,
     record_strategies,
 )
+from .policy_maps import binned_mean
 
 #: Largest aspect ratio drawn for a glyph (the swimmers' own reach ~10 at |Lambda| = 0.98).
 GLYPH_ASPECT_MAX = 4.0
@@ -65,7 +71,8 @@ def spheroid_aspect(shape_factor: np.ndarray) -> np.ndarray:
 # -- the replay record ---------------------------------------------------------------------------
 def record_inputs(cfg: FiguresConfig, dns: DNSFiguresConfig) -> dict[str, str]:
     """What a replay record depends on, as strings (kept in the record, compared on load)."""
-    return {"policy": dns.policy, "store": Path(dns.store).name, "n_swimmers": str(dns.n_swimmers),
+    return {"policy": dns.policy, "trained": dns.trained, "store": Path(dns.store).name,
+            "n_swimmers": str(dns.n_swimmers),
             "n_traj": str(dns.n_traj), "decode_n": str(dns.decode_n), "seed": str(cfg.seed),
             "params": json.dumps(dataclasses.asdict(cfg.params), sort_keys=True, default=str)}
 
@@ -79,9 +86,10 @@ def make_record(cfg: FiguresConfig, dns: DNSFiguresConfig) -> dict[str, np.ndarr
     sizes = EvalSizes(1, dns.n_swimmers, 1, cfg.progress, dns.n_swimmers)
     setup = EvalSetup(flow=spec, params=cfg.params, runtime=cfg.runtime, sizes=sizes,
                       seed=cfg.seed, record={})
-    a = record_strategies(setup, [dns.policy, "naive", "sto"], "DNS", FRAME_EVERY)
+    a = record_strategies(setup, [dns.policy, "naive", "sto", dns.trained], "DNS", FRAME_EVERY)
     box = float(a["box"])
-    pos = np.swapaxes(a["position"], 0, 1)[:, 0] / box  # (3, S, N+1, 2)
+    maps = policy_maps(a["signals"][0, 3], a["Lambda"][0, 3])
+    pos = np.swapaxes(a["position"], 0, 1)[:3, 0] / box  # (3, S, N+1, 2)
     disp = pos - pos[..., :1, :]
     nt = min(dns.n_traj, pos.shape[1])
     return {
@@ -97,7 +105,22 @@ def make_record(cfg: FiguresConfig, dns: DNSFiguresConfig) -> dict[str, np.ndarr
         "reference_distance": np.asarray(float(a["reference_distance"]) / box),
         "box_dns": np.asarray(box), "update_interval": a["update_interval"],
         **{f"input_{k}": np.asarray(v) for k, v in record_inputs(cfg, dns).items()},
+        **maps,
     }
+
+
+def policy_maps(signals: np.ndarray, lam: np.ndarray, bins: int = 30) -> dict[str, np.ndarray]:
+    """``<Lambda | S_np, n_theta>`` and ``<Lambda | S_np, omega>`` (as Fig. ku_pattern:
+    S_np and omega over their symmetric 99.5 % range, at least 5 samples per bin):
+    ``map_<other>`` ``(bins, bins)`` and its edges ``map_<other>_x``, ``map_<other>_y``."""
+    s = signals.reshape(-1, 5)
+    out = {}
+    for other, rng in (("n_theta", (-1.0, 1.0)), ("omega", _sym(s[:, 4]))):
+        mean, edges, _ = binned_mean(lam, [s[:, 3], s[:, SIGNAL[other]]], bins=bins,
+                                     ranges=[_sym(s[:, 3]), rng], min_count=5)
+        out[f"map_{other}"] = mean.astype(np.float32)
+        out[f"map_{other}_x"], out[f"map_{other}_y"] = edges
+    return out
 
 
 def dns_record(cfg: FiguresConfig, dns: DNSFiguresConfig) -> tuple[dict | None, str]:
@@ -110,11 +133,12 @@ def dns_record(cfg: FiguresConfig, dns: DNSFiguresConfig) -> tuple[dict | None, 
         if status != "complete":
             return None, (f"no replay record {path} and no finished store {dns.store} "
                           f"(status {status}) to make it from")
-        try:
-            if "/" in dns.policy:  # a policy file (not a baseline such as naive(-0.5))
-                resolve_policy_file(dns.policy)
-        except (FileNotFoundError, ValueError) as err:
-            return None, f"no replay record {path}: dns.policy={dns.policy!r} ({err})"
+        for key, spec in (("dns.policy", dns.policy), ("dns.trained", dns.trained)):
+            try:
+                if "/" in spec:  # a policy file (not a baseline such as naive(-0.5))
+                    resolve_policy_file(spec)
+            except (FileNotFoundError, ValueError) as err:
+                return None, f"no replay record {path}: {key}={spec!r} ({err})"
         data = make_record(cfg, dns)
         path.parent.mkdir(parents=True, exist_ok=True)
         tmp = path.with_name(path.name + ".tmp.npz")
@@ -205,11 +229,13 @@ def _glyphs(ax, path: np.ndarray, theta: np.ndarray, lam: np.ndarray, every: int
 
 def fig_dns_flow(rec: dict | None, pdfs: dict | None, transfer: dict[str, dict] | None,
                  path: Path, glyph_window: float = 20.0, glyph_every: float = 2.0,
-                 title: str = "", dns_policy: str = "pretrained/dns") -> dict:
-    """(a) vorticity, trajectory and glyphs; (b) PDFs; (c) transfer ratios. Panels whose
-    record is None say so instead."""
+                 title: str = "", dns_trained: str = "pretrained/dns") -> dict:
+    """(a) vorticity, trajectory and glyphs; (b) PDFs; (c) transfer ratios; (d), (e) the
+    DNS-trained policy's maps. Panels whose record is None say so instead."""
     plt = _plt()
-    fig, (a, b, c) = plt.subplots(1, 3, figsize=(14, 4.4))
+    fig, axes = plt.subplots(2, 3, figsize=(14, 8.6))
+    (a, b, c), (d, e, spare) = axes
+    spare.axis("off")
     drawn: dict = {}
     if rec is not None:
         tau_u = float(rec["update_interval"])  # decisions every T_u = update_interval tau_K
@@ -236,8 +262,18 @@ def fig_dns_flow(rec: dict | None, pdfs: dict | None, transfer: dict[str, dict] 
         a.set_title(f"(a) smart swimmer, {glyph_window:g} $\\tau_K$; glyphs every "
                     f"{glyph_every:g} $\\tau_K$ (orange prolate, blue oblate)", fontsize=8)
         drawn["a"] = {"glyphs": g, "grid": m, "window_decisions": n_win}
+        for ax, other, tag in ((d, "n_theta", "d"), (e, "omega", "e")):
+            mean = rec[f"map_{other}"]
+            im = ax.pcolormesh(rec[f"map_{other}_x"], rec[f"map_{other}_y"], mean.T,
+                               cmap="coolwarm", vmin=-1, vmax=1)
+            ax.set_xlabel(LABEL["S_np"])
+            ax.set_ylabel(LABEL[other])
+            ax.set_title(f"({tag}) DNS-trained policy: " + r"$\langle\Lambda\rangle$", fontsize=8)
+            fig.colorbar(im, ax=ax, shrink=0.8, label=r"$\langle\Lambda\rangle$")
+            drawn[tag] = int(np.isfinite(mean).sum())
     else:
-        a.text(0.5, 0.5, "no DNS replay record", ha="center", transform=a.transAxes)
+        for ax in (a, d, e):
+            ax.text(0.5, 0.5, "no DNS replay record", ha="center", transform=ax.transAxes)
     if pdfs:
         names = {"omega": r"$\omega$", "S_xx": r"$S_{xx}$", "S_xy": r"$S_{xy}$"}
         for name, d in pdfs.items():
@@ -255,7 +291,7 @@ def fig_dns_flow(rec: dict | None, pdfs: dict | None, transfer: dict[str, dict] 
         b.text(0.5, 0.5, "no pooled PDFs (swimrl-dns-plots)", ha="center", transform=b.transAxes)
     b.set_title("(b) gradient PDFs, pooled over the stored runs", fontsize=8)
     if transfer:
-        drawn["c"] = _draw_transfer(c, transfer, f"policy({dns_policy})")
+        drawn["c"] = _draw_transfer(c, transfer, f"policy({dns_trained})")
     else:
         c.text(0.5, 0.5, "no transfer records", ha="center", transform=c.transAxes)
     fig.suptitle(title, fontsize=8)
@@ -319,9 +355,10 @@ def build_dns_flow(cfg: FiguresConfig, dns: DNSFiguresConfig) -> dict:
     title = "no replay record"
     if rec is not None:
         title = (f"(a) held-out DNS run {rec['input_store']}, smart = {rec['input_policy']}; "
-                 f"(c) smart = the shipped policies, minimal = fits to them")
+                 f"(c) smart = the shipped policies, minimal = fits to them; (d, e) "
+                 f"{rec['input_trained']} on {rec['input_n_swimmers']} swimmers x 1 start")
     out = fig_dns_flow(rec, pdfs, summary, cfg.out / "dnsFlow.png", dns.glyph_window,
-                       dns.glyph_every, title, dns.policy)
+                       dns.glyph_every, title, dns.trained)
     if summary:
         out["transfer"] = summary
     missing = [why] if why else []

@@ -65,8 +65,10 @@ class DNSFiguresConfig:
     """Directory searched for ``comparison.json`` (one per held-out realisation)."""
     checks: Path
     """``dns_checks.json`` of ``swimrl-dns-plots`` (pooled PDFs)."""
-    policy: str = "pretrained/dns"
-    """The smart policy of (a) and the videos."""
+    policy: str = "pretrained/ku10"
+    """The smart policy of (a) and the videos (the paper's video 5: trained at Ku = 10)."""
+    trained: str = "pretrained/dns"
+    """The policy trained in the DNS: the dotted line of (c) and the maps of (d), (e)."""
     n_swimmers: int = 300
     n_traj: int = 4
     decode_n: int | None = 384
