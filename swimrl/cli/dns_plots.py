@@ -36,7 +36,8 @@ def main(argv: list[str] | None = None) -> dict:
         out = args.out or str(Path(args.store[0]).parent / "dns_checks")
         summary = check_stores([Path(s) for s in args.store], Path(out), args.snapshots,
                                tuple(args.fit))
-        print(json.dumps(summary, indent=1))
+        shown = {k: v for k, v in summary.items() if k != "pooled_pdfs"}  # curves: in the file
+        print(json.dumps(shown, indent=1))
         return summary
     out = args.out or str(Path(args.store[0]).with_suffix("")) + "_plots"
     summary = make_plots(args.store[0], out, args.snapshots, tuple(args.fit))
