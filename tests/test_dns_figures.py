@@ -46,6 +46,8 @@ def test_transfer_summary_pairs_each_flow_with_sto(tmp_path):
     assert smart["ratio_realisation_std"] == pytest.approx(np.std([4.0 / 3, 1.1], ddof=1))
     assert s["naive(+0.98)"]["ratio"] == pytest.approx(0.5)
     assert s["sto"]["ratio_realisation_std"] == 0 and s["sto"]["n_realisations"] == 2
+    table = dfig.transfer_markdown(s)
+    assert "| policy(pretrained/ku10) |" in table and "1.240 ±" in table and "1.333, 1.100" in table
     assert dfig.ku_of("policy(pretrained/ku1e7)") == 1e7
     assert dfig.ku_of("minimal(ku0.1)") == 0.1 and dfig.ku_of("policy(pretrained/dns)") is None
     assert dfig.ku_of("policy(runs/ku10_seed0)") is None and dfig.ku_of("minimal(ku1_0)") is None

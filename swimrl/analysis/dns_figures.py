@@ -35,6 +35,7 @@ from pathlib import Path
 
 import numpy as np
 
+from swimrl.evaluation.records import markdown_table
 from swimrl.evaluation.rollout import EvalSetup, EvalSizes
 from swimrl.evaluation.statistics import paired_ratio
 from swimrl.flows.build import StoredRunSpec
@@ -202,6 +203,22 @@ def transfer_summary(per: dict[str, np.ndarray], reference: str = "sto") -> dict
     return out
 
 
+def transfer_markdown(summary: dict[str, dict]) -> str:
+    """The transfer table: per strategy R_hat (mean and std over flows), the paired ratio to
+    STO over all flows (+- delta-method SEM), each realisation's ratio and their std."""
+    rows = []
+    for label, s in summary.items():
+        per = ", ".join(f"{r:.3f}" for r in s["ratio_realisations"])
+        rows.append([label, f"{s['R_hat']:.3f} ± {s['R_hat_std']:.3f}",
+                     f"{s['ratio']:.3f} ± {s['ratio_sem']:.3f}", per,
+                     f"{s['ratio_realisation_std']:.3f}"])
+    n = next(iter(summary.values()))
+    head = ["strategy", f"R̂ (mean ± std over {n['n_flows']} flows)",
+            "R̂ / R̂_STO (paired, ± SEM)",
+            f"per realisation ({n['n_realisations']})", "std over realisations"]
+    return markdown_table(head, rows)
+
+
 def ku_of(label: str) -> float | None:
     """Ku of ``policy(.../ku10)`` or ``minimal(ku1e7)`` (the label ends in ``ku<number>``);
     None for other labels."""
@@ -361,6 +378,7 @@ def build_dns_flow(cfg: FiguresConfig, dns: DNSFiguresConfig) -> dict:
                        dns.glyph_every, title, dns.trained)
     if summary:
         out["transfer"] = summary
+        (cfg.out / "dnsFlow_transfer.md").write_text(transfer_markdown(summary))
     missing = [why] if why else []
     missing += [f"no pooled_pdfs in {dns.checks}"] if not pdfs else []
     missing += [f"no comparison.json under {dns.transfer}"] if not summary else []
