@@ -256,6 +256,7 @@ def dns_figures_config(node: DictConfig, absolute) -> DNSFiguresConfig:
         store=Path(absolute(str(node.store))), record=Path(absolute(str(node.record))),
         transfer=Path(absolute(str(node.transfer))), checks=Path(absolute(str(node.checks))),
         policy=str(node.policy), trained=str(node.trained),
+        curve=None if node.get("curve") is None else Path(absolute(str(node.curve))),
         n_swimmers=as_int("dns.n_swimmers", node.n_swimmers, low=1),
         n_traj=as_int("dns.n_traj", node.n_traj, low=1),
         decode_n=None if decode_n is None else as_int("dns.decode_n", decode_n, low=8),

@@ -72,8 +72,11 @@ def test_figure_draws_every_panel_from_tiny_records(tmp_path):
     summary = {"sto": row(1.0, 0.0), "policy(pretrained/ku10)": row(1.1, 0.05),
                "policy(pretrained/ku1)": row(0.9, 0.05), "policy(pretrained/dns)": row(1.2, 0.04),
                "naive(+0.98)": row(0.6, 0.02), "policy(runs/other)": row(1.0, 0.1)}
+    curve = {"frames": np.array([0.0, 1e6, 2e6]), "eval/R_hat": np.array([0.2, np.nan, 0.5]),
+             "eval/R_hat_sem": np.array([0.01, np.nan, 0.01])}
     out = dfig.fig_dns_flow(rec, pdfs, summary, tmp_path / "d.png", glyph_window=4.0,
-                            glyph_every=1.0)
+                            glyph_every=1.0, curve=curve)
+    assert out["f"] == [0.2, 0.5]
     assert (tmp_path / "d.png").stat().st_size > 10_000
     assert out["a"]["window_decisions"] == 40 and out["a"]["glyphs"] == 4  # t = 0, 1, 2, 3
     assert out["b"] == ["omega"] and out["d"] == 4 and out["e"] == 4

@@ -9,6 +9,7 @@ r"""Fig. ``dnsFlow`` and the DNS videos (5, 10) from committed records (``swimrl
   over the stored runs, from ``dns_checks.json`` of ``swimrl-dns-plots``;
 * (d), (e) ``<Lambda | S_np, n_theta>`` and ``<Lambda | S_np, omega>`` of the DNS-trained
   policy (``dns.trained``) on the same replay (the paper's (d), (e));
+* (f) the DNS-trained policy's evaluation ``R_hat`` during its training (its ``curves.csv``);
 * (c) the transfer: ``R_hat / R_hat_STO`` of the policies trained at each Ku and of the
   minimal model with the coefficients fitted at each Ku, against that Ku; the DNS-trained
   policy (``dns.policy``) and naive as horizontal lines. All strategies run on the same
@@ -55,9 +56,12 @@ from .figures import (
     record_strategies,
 )
 from .policy_maps import binned_mean
+from .training_curves import read_curves
 
 #: Largest aspect ratio drawn for a glyph (the swimmers' own reach ~10 at |Lambda| = 0.98).
 GLYPH_ASPECT_MAX = 4.0
+#: The paper's colours of Fig. dnsFlow(b).
+PDF_COLOURS = {"omega": "tab:blue", "S_xx": "tab:green", "S_xy": "tab:red"}
 #: ``ku<number>`` at the end of a policy or fit label: the Ku it was trained or fitted at.
 KU_LABEL = re.compile(r"(?:^|/)ku((?:\d+\.?\d*|\.\d+)(?:e[+-]?\d+)?)$")
 
@@ -246,14 +250,27 @@ def _glyphs(ax, path: np.ndarray, theta: np.ndarray, lam: np.ndarray, every: int
 
 def fig_dns_flow(rec: dict | None, pdfs: dict | None, transfer: dict[str, dict] | None,
                  path: Path, glyph_window: float = 20.0, glyph_every: float = 2.0,
-                 title: str = "", dns_trained: str = "pretrained/dns") -> dict:
+                 title: str = "", dns_trained: str = "pretrained/dns",
+                 curve: dict[str, np.ndarray] | None = None) -> dict:
     """(a) vorticity, trajectory and glyphs; (b) PDFs; (c) transfer ratios; (d), (e) the
-    DNS-trained policy's maps. Panels whose record is None say so instead."""
+    DNS-trained policy's maps; (f) its training curve. Panels whose record is None say so
+    instead (or, for (f), stay empty)."""
     plt = _plt()
     fig, axes = plt.subplots(2, 3, figsize=(14, 8.6))
-    (a, b, c), (d, e, spare) = axes
-    spare.axis("off")
+    (a, b, c), (d, e, f) = axes
     drawn: dict = {}
+    if curve:
+        x, y, err = (np.asarray(curve[k], dtype=float) for k in
+                     ("frames", "eval/R_hat", "eval/R_hat_sem"))
+        keep = np.isfinite(y)
+        f.errorbar(x[keep] / 1e6, y[keep], yerr=np.nan_to_num(err[keep]), color="k", marker="o",
+                   capsize=3)
+        f.set_xlabel("training frames / $10^6$")
+        f.set_ylabel(r"$\hat R$ (evaluation in the training run)")
+        f.set_title("(f) training of the DNS-trained policy", fontsize=8)
+        drawn["f"] = y[keep].tolist()
+    else:
+        f.axis("off")
     if rec is not None:
         tau_u = float(rec["update_interval"])  # decisions every T_u = update_interval tau_K
         n_win = int(round(glyph_window / tau_u))
@@ -269,6 +286,7 @@ def fig_dns_flow(rec: dict | None, pdfs: dict | None, transfer: dict[str, dict] 
                       cmap="RdBu_r", vmin=-vmax, vmax=vmax, interpolation="bilinear")
         fig.colorbar(im, ax=a, shrink=0.8, label=r"$\omega\tau_K$ at $t = 0$")
         a.plot(x[:, 0], x[:, 1], color="k", lw=1.0, zorder=3)
+        a.plot(*x[0], "r*", ms=12, zorder=5, label="start")
         g = _glyphs(a, x, rec["smart_theta"][0, :n_win], rec["smart_Lambda"][0, :n_win],
                     max(1, int(round(glyph_every / tau_u))), 0.06)
         a.set_xlim(x[:, 0].min() - pad, x[:, 0].max() + pad)
@@ -296,7 +314,7 @@ def fig_dns_flow(rec: dict | None, pdfs: dict | None, transfer: dict[str, dict] 
         for name, d in pdfs.items():
             z, p = np.asarray(d["z"]), np.asarray(d["pdf"])
             keep = p > 0
-            b.semilogy(z[keep], p[keep], label=names.get(name, name))
+            b.semilogy(z[keep], p[keep], label=names.get(name, name), color=PDF_COLOURS.get(name))
         zz = np.linspace(-6, 6, 241)
         b.semilogy(zz, np.exp(-zz**2 / 2) / math.sqrt(2 * math.pi), "k--", label="Gaussian")
         b.set_ylim(1e-7, 1)
@@ -374,8 +392,9 @@ def build_dns_flow(cfg: FiguresConfig, dns: DNSFiguresConfig) -> dict:
         title = (f"(a) held-out DNS run {rec['input_store']}, smart = {rec['input_policy']}; "
                  f"(c) smart = the shipped policies, minimal = fits to them; (d, e) "
                  f"{rec['input_trained']} on {rec['input_n_swimmers']} swimmers x 1 start")
+    curve = read_curves(dns.curve) if dns.curve and Path(dns.curve).exists() else None
     out = fig_dns_flow(rec, pdfs, summary, cfg.out / "dnsFlow.png", dns.glyph_window,
-                       dns.glyph_every, title, dns.trained)
+                       dns.glyph_every, title, dns.trained, curve)
     if summary:
         out["transfer"] = summary
         (cfg.out / "dnsFlow_transfer.md").write_text(transfer_markdown(summary))

@@ -69,6 +69,8 @@ class DNSFiguresConfig:
     """The smart policy of (a) and the videos (the paper's video 5: trained at Ku = 10)."""
     trained: str = "pretrained/dns"
     """The policy trained in the DNS: the dotted line of (c) and the maps of (d), (e)."""
+    curve: Path | None = None
+    """``curves.csv`` of its training run: (f), its evaluation R_hat against frames."""
     n_swimmers: int = 300
     n_traj: int = 4
     decode_n: int | None = 384
