@@ -371,8 +371,8 @@ def _draw_transfer(ax, summary: dict[str, dict], dns_label: str) -> dict:
     ax.set_xlabel("Ku of training")
     ax.set_ylabel(r"$\hat R / \hat R_{\rm STO}$ in the DNS")
     n = next(iter(summary.values()))
-    ax.set_title(f"(c) transfer: {n['n_realisations']} held-out realisations, {n['n_flows']} "
-                 "flows; bars: std over realisations", fontsize=8)
+    ax.set_title(f"(c) transfer: {n['n_realisations']} held-out runs, {n['n_flows']} flows; "
+                 "bars: std over runs", fontsize=8)
     ax.legend(fontsize=6, loc="lower right")
     return {**{k: [list(p) for p in sorted(v)] for k, v in series.items()},
             "lines": {k: v["ratio"] for k, v in lines.items()}, "not_drawn": other}
