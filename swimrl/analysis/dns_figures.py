@@ -36,7 +36,7 @@ from pathlib import Path
 
 import numpy as np
 
-from swimrl.evaluation.records import markdown_table
+from swimrl.evaluation.records import markdown_table, read_npz, write_npz
 from swimrl.evaluation.rollout import EvalSetup, EvalSizes
 from swimrl.evaluation.statistics import paired_ratio
 from swimrl.flows.build import StoredRunSpec
@@ -144,13 +144,8 @@ def dns_record(cfg: FiguresConfig, dns: DNSFiguresConfig) -> tuple[dict | None, 
                     resolve_policy_file(spec)
             except (FileNotFoundError, ValueError) as err:
                 return None, f"no replay record {path}: {key}={spec!r} ({err})"
-        data = make_record(cfg, dns)
-        path.parent.mkdir(parents=True, exist_ok=True)
-        tmp = path.with_name(path.name + ".tmp.npz")
-        np.savez_compressed(tmp, **data)
-        tmp.replace(path)
-    with np.load(path) as z:
-        out = {k: z[k] for k in z.files}
+        write_npz(make_record(cfg, dns), path)
+    out = read_npz(path)
     made = {k[6:]: str(v) for k, v in out.items() if k.startswith("input_")}
     differ = sorted(k for k, v in record_inputs(cfg, dns).items() if made.get(k) != v)
     if differ:

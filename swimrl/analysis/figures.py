@@ -24,6 +24,7 @@ from pathlib import Path
 import numpy as np
 
 from swimrl.env import EnvParams, SwimmerEnv
+from swimrl.evaluation.records import read_npz, write_npz
 from swimrl.evaluation.rollout import EvalSetup, EvalSizes, chunk_seed, evaluate_shared
 from swimrl.evaluation.trajectories import TrajectoryRecorder
 from swimrl.flows.build import StochasticSpec
@@ -128,13 +129,9 @@ def cached(cfg: FiguresConfig, name: str, inputs: dict,
     text = json.dumps({"v": CACHE_VERSION, **inputs}, sort_keys=True, default=str)
     path = Path(cfg.cache) / f"{name}-{hashlib.sha256(text.encode()).hexdigest()[:12]}.npz"
     if path.exists():
-        with np.load(path) as z:
-            return {k: z[k] for k in z.files}
+        return read_npz(path)
     data = compute()
-    path.parent.mkdir(parents=True, exist_ok=True)
-    tmp = path.with_name(path.name + ".tmp.npz")
-    np.savez_compressed(tmp, **data)
-    tmp.replace(path)
+    write_npz(data, path)
     return data
 
 

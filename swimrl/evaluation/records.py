@@ -16,6 +16,8 @@ import math
 from collections.abc import Sequence
 from pathlib import Path
 
+import numpy as np
+
 from swimrl.errors import NonFiniteError
 
 
@@ -51,6 +53,23 @@ def write_json(record: dict, path: Path, overwrite: bool = True) -> Path:
     tmp.write_text(json.dumps(record, indent=2, allow_nan=False))
     tmp.replace(path)
     return path
+
+
+def write_npz(data: dict, path: Path) -> Path:
+    """Write the arrays ``data`` to ``path`` (``.npz``, compressed) atomically, making its
+    directory."""
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    tmp = path.with_name(path.name + ".tmp.npz")
+    np.savez_compressed(tmp, **data)
+    tmp.replace(path)
+    return path
+
+
+def read_npz(path: Path) -> dict:
+    """Every array of an ``.npz`` file, loaded."""
+    with np.load(path) as z:
+        return {k: z[k] for k in z.files}
 
 
 def markdown_table(head: Sequence[str], rows: Sequence[Sequence[str]]) -> str:

@@ -32,6 +32,8 @@ from tensordict import TensorDictBase
 
 from swimrl.physics.signals import SIGNAL_NAMES
 
+from .records import write_npz
+
 #: File name of a trajectory record, next to ``metrics.json``.
 TRAJECTORY_FILE = "trajectories.npz"
 
@@ -118,17 +120,12 @@ def save_trajectories(arrays: dict[str, np.ndarray], path: Path, strategies: lis
                       config: dict) -> Path:
     """Write ``arrays`` (float32 where floating) with the strategy names, the signal names
     and the resolved ``config`` (JSON) to ``path`` (``.npz``, compressed), atomically."""
-    path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
     data = {k: (v.astype(np.float32) if v.dtype.kind == "f" and v.ndim > 2 and k != "R_hat"
                 else v) for k, v in arrays.items()}
     data["strategies"] = np.asarray(strategies)
     data["signal_names"] = np.asarray(SIGNAL_NAMES)
     data["config"] = np.asarray(json.dumps(config))
-    tmp = path.with_name(path.name + ".tmp.npz")
-    np.savez_compressed(tmp, **data)
-    tmp.replace(path)
-    return path
+    return write_npz(data, path)
 
 
 def load_trajectories(path: Path) -> dict:
