@@ -164,9 +164,10 @@ def test_checks_across_independent_runs(tmp_path):
     stored window, pooled PDFs and the resolution check over every run."""
     from swimrl.analysis.dns_plots import stored_window_series
     from swimrl.cli.dns_plots import main
+    from swimrl.cli.dns_plots import run as run_plots
 
     paths = [run_dns(_cfg(tmp_path / f"s{seed}.zarr", f"seed={seed}")) for seed in (1, 2)]
-    checks = main([str(p) for p in paths] + ["--out", str(tmp_path / "checks"),
+    checks = run_plots([str(p) for p in paths] + ["--out", str(tmp_path / "checks"),
                                              "--snapshots", "3", "--fit", "3", "8"])
     for name in ("dns_stability.png", "dns_pdfs_all.png", "dns_checks.json"):
         assert (tmp_path / "checks" / name).stat().st_size > 100
@@ -187,15 +188,19 @@ def test_checks_across_independent_runs(tmp_path):
         z, pdf = np.asarray(curve["z"]), np.asarray(curve["pdf"])
         assert (pdf * (z[1] - z[0])).sum() == pytest.approx(1.0, abs=0.01)
     # runs are added one at a time from their records: the same checks without the stores
-    again = main([str(paths[0]), "--checks", "--out", str(tmp_path / "one"), "--snapshots", "3",
-                  "--fit", "3", "8"])
+    again = run_plots([str(paths[0]), "--checks", "--out", str(tmp_path / "one"),
+                       "--snapshots", "3", "--fit", "3", "8"])
     assert [r["seed"] for r in again["runs"]] == [1]
     (tmp_path / "one" / "runs" / f"{paths[1].stem}.json").write_text(
         (tmp_path / "checks" / "runs" / f"{paths[1].stem}.json").read_text())
     paths[1].rename(tmp_path / "gone.zarr")
-    both = main([str(paths[0]), "--checks", "--out", str(tmp_path / "one"), "--snapshots", "3",
-                 "--fit", "3", "8"])
+    both = run_plots([str(paths[0]), "--checks", "--out", str(tmp_path / "one"),
+                      "--snapshots", "3", "--fit", "3", "8"])
     assert both["runs"] == checks["runs"] and both["pooled_pdfs"] == checks["pooled_pdfs"]
+    # the console entry (setuptools calls sys.exit(main())) exits 0 on success, not with the
+    # summary as its status
+    assert main([str(paths[0]), "--checks", "--out", str(tmp_path / "one"), "--snapshots", "3",
+                 "--fit", "3", "8"]) == 0
 
 
 def test_finished_store_extends_to_the_longer_run(tmp_path):

@@ -12,7 +12,7 @@ import torch
 from swimrl.analysis.dns_plots import check_stores, make_plots
 
 
-def main(argv: list[str] | None = None) -> dict:
+def run(argv: list[str] | None = None) -> dict:
     """``swimrl-dns-plots <store> [<store> ...] [--out DIR] [--snapshots M]``; by default the
     figures go next to the store, into ``<store>_plots/`` (never into the repository's
     ``docs/``); with several stores (or ``--checks``) also the checks across them into
@@ -45,5 +45,11 @@ def main(argv: list[str] | None = None) -> dict:
     return summary
 
 
+def main(argv: list[str] | None = None) -> int:
+    """The console entry: :func:`run`, exit status 0 (its summary is printed, not returned)."""
+    run(argv)
+    return 0
+
+
 if __name__ == "__main__":
-    main()
+    raise SystemExit(main())
