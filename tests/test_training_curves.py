@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import numpy as np
+import pytest
 
 from swimrl.analysis.training_curves import main, plot_training_curves, read_curves
 
@@ -28,3 +29,27 @@ def test_curves_are_read_and_drawn(tmp_path):
     np.testing.assert_array_equal(drawn["a"][1], [1, 0.9, 0.8])
     main([str(tmp_path / "m.png"), f"x (lr=3e-3)={a}", "--reference", "STO=0.5"])
     assert (tmp_path / "m.png").is_file()
+
+
+def test_resumed_run_keeps_the_committed_curve(tmp_path):
+    """A run resumed from a committed record (checkpoint + curves.csv, no event files) writes a
+    CSV holding the committed rows and its new steps; a step in both keeps the new value."""
+    import csv
+
+    from torch.utils.tensorboard import SummaryWriter
+
+    from swimrl.rl.curves import read_curves_csv, write_curves
+
+    committed = tmp_path / "curves.csv"
+    committed.write_text("frames,eval/R_hat,train/R_hat\n100,0.25,\n200,,0.3\n300,,0.4\n")
+    writer = SummaryWriter(str(tmp_path / "tb" / "ppo"))
+    for step, value in ((300, 0.45), (400, 0.5)):
+        writer.add_scalar("train/R_hat", value, step)
+    writer.close()
+    write_curves(tmp_path)
+    rows = read_curves_csv(committed)
+    assert sorted(rows) == [100, 200, 300, 400]
+    assert rows[100] == {"eval/R_hat": 0.25} and rows[200] == {"train/R_hat": 0.3}
+    assert rows[300]["train/R_hat"] == pytest.approx(0.45) and rows[400]["train/R_hat"] == 0.5
+    header = next(csv.reader(committed.open()))
+    assert header[0] == "frames" and "time/frames_per_s" in header

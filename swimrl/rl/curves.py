@@ -3,7 +3,9 @@
 One row per logged step (frames), one column per tag; a step logged twice (a resumed run
 repeats the updates after its last checkpoint) keeps the value written last. The CSV is
 small enough to commit next to the run's policy, so training-curve figures can be drawn
-from a fresh clone without the event files.
+from a fresh clone without the event files; a run resumed from such a committed record (its
+checkpoint and ``curves.csv``, no event files) keeps the rows of the CSV that its new event
+files do not hold, so its curve stays whole.
 
     python -m swimrl.rl.curves RUN_DIR [--out RUN_DIR/curves.csv]
 """
@@ -51,10 +53,25 @@ def read_scalars(run_dir: Path, tags=CURVE_TAGS) -> dict[int, dict[str, float]]:
     return rows
 
 
+def read_curves_csv(path: Path) -> dict[int, dict[str, float]]:
+    """``{frames: {tag: value}}`` of a ``curves.csv`` (empty cells left out)."""
+    rows: dict[int, dict[str, float]] = {}
+    with open(path, newline="") as fh:
+        for rec in csv.DictReader(fh):
+            step = int(rec.pop("frames"))
+            rows[step] = {t: float(v) for t, v in rec.items() if v}
+    return rows
+
+
 def write_curves(run_dir: Path, out: Path | None = None, tags=CURVE_TAGS) -> Path:
-    """Write ``curves.csv`` (``frames`` then one column per tag; empty where not logged)."""
+    """Write ``curves.csv`` (``frames`` then one column per tag; empty where not logged).
+
+    The event files win; steps that only an existing ``out`` holds (logged before the run
+    was resumed from a committed record without its event files) are kept."""
     out = Path(out) if out is not None else Path(run_dir) / "curves.csv"
     rows = read_scalars(Path(run_dir), tags)
+    if out.is_file():
+        rows = {**read_curves_csv(out), **rows}
     tmp = out.with_suffix(out.suffix + ".tmp")
     with open(tmp, "w", newline="") as fh:
         w = csv.writer(fh)
