@@ -244,6 +244,7 @@ def figures_config(cfg: DictConfig) -> FiguresConfig:
         results=Path(to_absolute_path(str(cfg.results))),
         curves=Path(to_absolute_path(str(cfg.curves))),
         fits=Path(to_absolute_path(str(cfg.fits))),
+        ablation=Path(to_absolute_path(str(cfg.ablation))),
         dns=None if cfg.get("dns") is None else dns_figures_config(cfg.dns, to_absolute_path),
         progress=as_bool("progress", cfg.progress),
     )

@@ -35,6 +35,8 @@ from swimrl.runtime import Runtime
 
 from .performance import load, summarise
 from .policy_maps import binned_mean, snn_extremes
+from .signal_ablation import AblationRun, draw_curves, draw_ratios, read_ablation
+from .signal_ablation import summarise as ablation_summary
 from .training_curves import read_curves
 
 #: Bump when a cached array's meaning changes.
@@ -113,6 +115,8 @@ class FiguresConfig:
     """Searched for ``curves.csv`` (trainingCurves)."""
     fits: Path = Path("docs/results/minimal_fits")
     """``ku*/fit.json`` of ``swimrl-fit-minimal`` at each Ku (ablation (b), (c))."""
+    ablation: Path = Path("docs/results/ablation")
+    """Run directories of the signal-ablation multirun (ablation (a))."""
     dns: DNSFiguresConfig | None = None
     """Records of Fig. dnsFlow and videos 5, 10 (None: not drawn)."""
     progress: bool = True
@@ -718,13 +722,9 @@ def minimal_name(fit: dict) -> str:
     return "minimal(" + ",".join(f"{c[k]:.6g}" for k in ("c1", "c2", "c3", "c4")) + ")"
 
 
-def fig_minimal_model(kus: np.ndarray, r: dict[str, np.ndarray], err: dict[str, np.ndarray],
-                      coeffs: dict[str, np.ndarray], coeff_err: dict[str, np.ndarray],
-                      path: Path, title: str = "") -> dict:
-    """(b) R_hat of smart, the minimal model (fitted at each Ku) and STO against Ku; (c) the
-    fitted c1..c4 against Ku with their uncertainties."""
-    plt = _plt()
-    fig, (b, c) = plt.subplots(1, 2, figsize=(9.5, 3.9))
+def _draw_minimal(b, c, kus: np.ndarray, r: dict[str, np.ndarray], err: dict[str, np.ndarray],
+                  coeffs: dict[str, np.ndarray], coeff_err: dict[str, np.ndarray]) -> None:
+    """(b) R_hat of smart, the minimal model and STO against Ku; (c) c1..c4 against Ku."""
     colors = {**COLORS, "minimal": "tab:purple"}
     for name, y in r.items():
         b.errorbar(kus, y, yerr=err[name], color=colors[name], marker="o", capsize=3, label=name,
@@ -745,19 +745,48 @@ def fig_minimal_model(kus: np.ndarray, r: dict[str, np.ndarray], err: dict[str, 
     c.set_ylabel("fitted coefficient")
     c.set_title("(c) minimal-model coefficients", fontsize=9)
     c.legend(fontsize=7)
+
+
+def fig_ablation(kus: np.ndarray, r: dict[str, np.ndarray], err: dict[str, np.ndarray],
+                 coeffs: dict[str, np.ndarray], coeff_err: dict[str, np.ndarray], path: Path,
+                 title: str = "", runs: list[AblationRun] | None = None) -> dict:
+    """(a) smart / STO at Ku = 10 per signal set (the training multirun's ``runs``; "pending"
+    where there are none) and (a') their held-out curves; (b) R_hat of smart, the minimal
+    model (fitted at each Ku) and STO against Ku; (c) the fitted c1..c4 against Ku."""
+    plt = _plt()
+    fig, axes = plt.subplots(2, 2, figsize=(10, 7.6))
+    (a, a2), (b, c) = axes
+    out: dict = {}
+    if runs:
+        summary = ablation_summary(runs)
+        draw_ratios(a, summary)
+        out["ablation"] = {s["label"]: {"seeds": s["seeds"], "ratios": s["ratios"].tolist(),
+                                        "mean": s["mean"], "std": s["std"]} for s in summary}
+        out["curves_last"] = draw_curves(a2, runs, summary)
+        kubo, frames = runs[0].kubo, runs[0].frames
+        a.set_title(f"(a) signal ablation, Ku = {kubo:g}, {frames / 1e6:g}M frames per run",
+                    fontsize=9)
+        a2.set_title("(a') the runs' held-out curves (mean, band: std over seeds)", fontsize=9)
+    else:
+        for ax in (a, a2):
+            ax.text(0.5, 0.5, "signal ablation: no records", ha="center", va="center",
+                    transform=ax.transAxes)
+            ax.set_axis_off()
+    _draw_minimal(b, c, kus, r, err, coeffs, coeff_err)
     fig.suptitle(title, fontsize=8)
     fig.tight_layout()
     _save(fig, path)
     return {"kubo": kus.tolist(), **{k: np.asarray(v).tolist() for k, v in r.items()},
-            **{k: np.asarray(v).tolist() for k, v in coeffs.items()}}
+            **{k: np.asarray(v).tolist() for k, v in coeffs.items()}, **out}
 
 
 def build_ablation(cfg: FiguresConfig) -> dict:
-    """Fig. ablation (b), (c) from the committed fits; (a), the signal-set training
-    multirun, is not built yet."""
+    """Fig. ablation: (a) from the signal-ablation multirun's records, (b), (c) from the
+    committed fits."""
     fits = read_fits(cfg.fits)
     if not fits:
         return {"pending": f"no ku*/fit.json under {cfg.fits}"}
+    runs = read_ablation(cfg.ablation) if Path(cfg.ablation).is_dir() else []
     kus = np.array(list(fits))
     names = ("smart", "minimal", "STO")
     per = []
@@ -771,12 +800,18 @@ def build_ablation(cfg: FiguresConfig) -> dict:
     coeff_err = {k: np.array([f.get("flow_sem", f["stderr"])[k] for f in fits.values()])
                  for k in keys}
     n_fit = {f["config"]["eval"]["n_flows"] for f in fits.values()}
-    return fig_minimal_model(
+    if runs:
+        n_seeds = len({x.seed for x in runs})
+        head = (f"(a) {len(runs)} runs under {_shown(cfg.ablation)}, {n_seeds} seed(s) per set; "
+                "smart/STO paired on each run's held-out flows, bars: std over seeds")
+    else:
+        head = f"(a) pending: no records under {_shown(cfg.ablation)}"
+    return fig_ablation(
         kus, r, err, coeffs, coeff_err, cfg.out / "ablation.png",
-        f"(b) shipped smart policies; the minimal model with the coefficients fitted to them at "
-        f"each Ku; STO; {cfg.robust_flows} flows x {cfg.robust_swimmers} swimmers, bars: std "
-        f"over flows\n(c) fits on {'/'.join(map(str, sorted(n_fit)))} flows x 100 swimmers, "
-        "bars: SEM over flows; (a) signal ablation: not built")
+        f"{head}\n(b) shipped smart policies; the minimal model with the coefficients fitted to "
+        f"them at each Ku; STO; {cfg.robust_flows} flows x {cfg.robust_swimmers} swimmers, "
+        f"bars: std over flows; (c) fits on {'/'.join(map(str, sorted(n_fit)))} flows x 100 "
+        "swimmers, bars: SEM over flows", runs=runs)
 
 
 #: Figure name -> builder, in build order.
