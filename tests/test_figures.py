@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import json
 import math
+import shutil
 from pathlib import Path
 
 import numpy as np
@@ -147,53 +148,80 @@ def test_minimal_model_figure_reads_fits_and_draws_both_panels(tmp_path):
     assert (tmp_path / "m.png").stat().st_size > 1000
 
 
-def _ablation_run(root, signals, seed, smart, sto, frames=1000, kubo=10.0, curve=(0.3, 0.5)):
+def _ablation_run(root, signals, seed, smart, sto, frames=1000, kubo=10.0, curve=(0.3, 0.5),
+                  evals=None, name=None):
     """A run directory as `swimrl-train train.compare_baselines=true` writes it."""
-    d = root / f"{'_'.join(signals)}_seed{seed}"
+    d = root / (name or f"{'_'.join(signals)}_seed{seed}")
     d.mkdir(parents=True)
     cfg = {"signals": {"names": list(signals)}, "seed": seed, "flow": {"kubo": kubo},
            "train": {"total_frames": frames}}
-    (d / "metrics.json").write_text(json.dumps({"config": cfg}))
+    per_flow = [smart - 0.01, smart + 0.01]
+    (d / "metrics.json").write_text(json.dumps({"config": cfg, "per_flow": per_flow}))
     rows = [{"label": "sto", "R_hat_mean": sto, "ratio_to_first": 1.0, "ratio_sem": 0.0},
             {"label": "naive(+0.98)", "R_hat_mean": 0.3, "ratio_to_first": 0.3 / sto,
              "ratio_sem": 0.01},
             {"label": f"policy({d})", "R_hat_mean": smart, "ratio_to_first": smart / sto,
-             "ratio_sem": 0.01}]
-    (d / "comparison.json").write_text(json.dumps({"rows": rows, "config": cfg}))
-    (d / "curves.csv").write_text(
-        f"frames,eval/R_hat,train/R_hat\n0,{curve[0]:g},\n500,,0.4\n{frames},{curve[1]:g},\n")
+             "ratio_sem": 0.01, "per_flow": per_flow}]
+    (d / "comparison.json").write_text(json.dumps({"rows": rows, "config": cfg, "n_flows": 2,
+                                                   "n_swimmers": 4}))
+    evals = evals if evals is not None else ((0, curve[0]), (frames, curve[1]))
+    lines = [f"{f},{y:g}," for f, y in evals] + ["500,,0.4"]
+    (d / "curves.csv").write_text("frames,eval/R_hat,train/R_hat\n" + "\n".join(lines) + "\n")
+    return d
 
 
 def test_signal_ablation_records_summary_and_panel(tmp_path):
     """ablation (a): runs read from their records, grouped per signal set in the paper's order
     (whatever order the config lists the signals in), mean and std over seeds of the paired
-    ratio; one budget and one Ku for all runs, or a one-line refusal."""
+    ratio; curves averaged over the evaluation frames every seed has; one budget, Ku and
+    held-out size for all runs, one run per set and seed, a comparison that is its run's,
+    or a one-line refusal."""
     from swimrl.analysis import signal_ablation as sa
 
     root = tmp_path / "ablation"
-    for seed, (a, b) in enumerate(((0.65, 0.5), (0.62, 0.5))):
-        _ablation_run(root, ("omega", "S_np", "S_nn", "n_theta", "n_r"), seed, a, b,
-                      curve=(0.3, 0.6 + 0.02 * seed))
-    _ablation_run(root, ("n_r", "n_theta", "S_nn", "omega"), 0, 0.4, 0.5)
+    _ablation_run(root, ("omega", "S_np", "S_nn", "n_theta", "n_r"), 0, 0.65, 0.5,
+                  evals=((0, 0.3), (500, 0.5), (1000, 0.6)))
+    _ablation_run(root, ("omega", "S_np", "S_nn", "n_theta", "n_r"), 1, 0.62, 0.5,
+                  evals=((0, 0.3), (1000, 0.62)))  # evaluated less often: frames 0, 1000 only
+    _ablation_run(root, ("n_r", "n_theta", "S_nn", "omega"), 0, 0.4, 0.5, evals=())
     _ablation_run(root, ("n_theta", "S_np"), 0, 0.51, 0.5)
     runs = sa.read_ablation(root)
     assert len(runs) == 4 and {r.seed for r in runs} == {0, 1}
-    summary = sa.summarise(runs)
+    assert [r.curve is None for r in runs if r.signals == sa.SIGNAL_SETS[4]] == [True]
+    summary = sa.summarise_sets(runs)
     assert [s["signals"] for s in summary] == [sa.SIGNAL_SETS[0], sa.SIGNAL_SETS[3],
                                                sa.SIGNAL_SETS[4]]
     assert summary[0]["ratios"].tolist() == pytest.approx([1.3, 1.24])
-    assert summary[0]["mean"] == pytest.approx(1.27)
+    assert summary[0]["mean"] == pytest.approx(1.27) and summary[0]["sem_one"] is None
     assert summary[0]["std"] == pytest.approx(np.std([1.3, 1.24], ddof=1))
     assert summary[2]["std"] == 0.0 and summary[2]["mean"] == pytest.approx(0.8)
+    assert summary[2]["n"] == 1 and summary[2]["sem_one"] == 0.01
     assert sa.set_label(("S_np", "n_theta")) == r"[$n_\theta, S_{np}$]"
+    with pytest.raises(ValueError, match="allowed"):
+        sa.canonical(("n_r", "S_pn"))
     out = figures.fig_ablation(np.array([10.0]), {"smart": np.array([0.6])},
                                {"smart": np.array([0.0])}, {"c1": np.array([1.0])},
                                {"c1": np.array([0.1])}, tmp_path / "a.png", runs=runs)
     first = out["ablation"][summary[0]["label"]]
     assert first["seeds"] == [0, 1] and first["mean"] == pytest.approx(1.27)
-    assert out["curves_last"][summary[0]["label"]] == pytest.approx(0.61)  # mean over seeds
+    # mean over the seeds at the frames both evaluated (the 500 of seed 0 alone is left out)
+    assert out["curves_last"][summary[0]["label"]] == pytest.approx(0.61)
+    assert summary[2]["label"] not in out["curves_last"]  # no held-out evaluations
     assert (tmp_path / "a.png").stat().st_size > 1000
-    _ablation_run(root, ("n_r", "n_theta", "S_np"), 0, 0.5, 0.5, frames=2000)
-    with pytest.raises(ValueError, match="differ in frames") as err:
-        sa.read_ablation(root)
-    assert "\n" not in str(err.value)
+
+    def refused(match):
+        with pytest.raises(ValueError, match=match) as err:
+            sa.read_ablation(root)
+        assert "\n" not in str(err.value)
+
+    dup = _ablation_run(root / "again", ("n_theta", "S_np"), 0, 0.5, 0.5)
+    refused("found twice")
+    shutil.rmtree(dup)
+    other = _ablation_run(root, ("n_r", "n_theta", "S_np"), 0, 0.5, 0.5, frames=2000)
+    refused("differ in frames")
+    shutil.rmtree(other)
+    stale = _ablation_run(root, ("n_r", "n_theta", "S_np"), 0, 0.5, 0.5)
+    (stale / "metrics.json").write_text(json.dumps(
+        {"config": json.loads((stale / "metrics.json").read_text())["config"],
+         "per_flow": [0.7, 0.8]}))
+    refused("stale comparison")

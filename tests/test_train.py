@@ -260,12 +260,29 @@ def test_kill_and_resume_round_trip(train_cfg, tmp_path, monkeypatch):
 
 
 def test_stop_after_updates_then_resume(train_cfg, tmp_path):
+    import shutil
+
+    from swimrl.rl.curves import read_curves_csv
+
     assert train(train_cfg("train.stop_after_updates=3", "train.eval_every=0"), tmp_path) is None
     assert load_file(checkpoint_path(tmp_path))["counters"]["updates"] == 3
+    first = read_curves_csv(tmp_path / "curves.csv")
+    assert sorted(first) == [80, 160, 240]
+    # resumed from its committed record (checkpoint + curves.csv, the event files gone): the
+    # curve keeps the rows before the checkpoint
+    shutil.rmtree(tmp_path / "tb")
     m = train(train_cfg("resume=true", "train.eval_every=0"), tmp_path)
     assert m["training"]["updates"] == 4
-    again = train(train_cfg("overwrite=true", "train.eval_every=0"), tmp_path)
-    assert again["training"]["updates"] == 4
+    rows = read_curves_csv(tmp_path / "curves.csv")
+    assert sorted(rows) == [80, 160, 240, 320]
+    assert all(rows[s] == first[s] for s in (80, 160, 240))
+    # overwrite: a shorter run leaves none of the old run's records behind
+    (tmp_path / "comparison.json").write_text("{}")
+    again = train(train_cfg("overwrite=true", "train.eval_every=0", "train.total_frames=160"),
+                  tmp_path)
+    assert again["training"]["updates"] == 2
+    assert sorted(read_curves_csv(tmp_path / "curves.csv")) == [80, 160]
+    assert not (tmp_path / "comparison.json").exists()
 
 
 def test_training_and_evaluation_flows_differ(train_cfg):

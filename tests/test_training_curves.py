@@ -31,25 +31,29 @@ def test_curves_are_read_and_drawn(tmp_path):
     assert (tmp_path / "m.png").is_file()
 
 
-def test_resumed_run_keeps_the_committed_curve(tmp_path):
-    """A run resumed from a committed record (checkpoint + curves.csv, no event files) writes a
-    CSV holding the committed rows and its new steps; a step in both keeps the new value."""
+def test_curves_over_a_base(tmp_path):
+    """write_curves: the event files' rows over ``base`` (the rows a resumed run kept from its
+    committed CSV; a step in both keeps the event files' row); without a base, only the event
+    files, whatever an older CSV held."""
     import csv
 
     from torch.utils.tensorboard import SummaryWriter
 
     from swimrl.rl.curves import read_curves_csv, write_curves
 
-    committed = tmp_path / "curves.csv"
-    committed.write_text("frames,eval/R_hat,train/R_hat\n100,0.25,\n200,,0.3\n300,,0.4\n")
+    out = tmp_path / "curves.csv"
+    out.write_text("frames,eval/R_hat,train/R_hat\n100,0.25,\n200,,0.3\n300,,0.4\n")
+    base = read_curves_csv(out)
     writer = SummaryWriter(str(tmp_path / "tb" / "ppo"))
     for step, value in ((300, 0.45), (400, 0.5)):
         writer.add_scalar("train/R_hat", value, step)
     writer.close()
     write_curves(tmp_path)
-    rows = read_curves_csv(committed)
+    assert sorted(read_curves_csv(out)) == [300, 400]  # no base: the stale rows are gone
+    write_curves(tmp_path, base=base)
+    rows = read_curves_csv(out)
     assert sorted(rows) == [100, 200, 300, 400]
     assert rows[100] == {"eval/R_hat": 0.25} and rows[200] == {"train/R_hat": 0.3}
     assert rows[300]["train/R_hat"] == pytest.approx(0.45) and rows[400]["train/R_hat"] == 0.5
-    header = next(csv.reader(committed.open()))
+    header = next(csv.reader(out.open()))
     assert header[0] == "frames" and "time/frames_per_s" in header

@@ -35,9 +35,8 @@ from swimrl.runtime import Runtime
 
 from .performance import load, summarise
 from .policy_maps import binned_mean, snn_extremes
-from .signal_ablation import AblationRun, draw_curves, draw_ratios, read_ablation
-from .signal_ablation import summarise as ablation_summary
-from .training_curves import read_curves
+from .signal_ablation import AblationRun, draw_curves, draw_ratios, read_ablation, summarise_sets
+from .training_curves import PAPER_EPISODE_FRAMES, read_curves
 
 #: Bump when a cached array's meaning changes.
 CACHE_VERSION = 1
@@ -506,10 +505,6 @@ def find_curves(root: Path) -> dict[str, Path]:
     return {p.parent.name: p for p in sorted(Path(root).rglob("curves.csv"))}
 
 
-#: frames of one of the paper's training episodes (10 swimmers x 2000 decisions)
-PAPER_EPISODE_FRAMES = 10 * 2000
-
-
 def _ku_value(group: str) -> float:
     """``"ku1e7"`` -> 1e7 (``inf`` where the group is not ``ku<number>``)."""
     try:
@@ -750,15 +745,15 @@ def _draw_minimal(b, c, kus: np.ndarray, r: dict[str, np.ndarray], err: dict[str
 def fig_ablation(kus: np.ndarray, r: dict[str, np.ndarray], err: dict[str, np.ndarray],
                  coeffs: dict[str, np.ndarray], coeff_err: dict[str, np.ndarray], path: Path,
                  title: str = "", runs: list[AblationRun] | None = None) -> dict:
-    """(a) smart / STO at Ku = 10 per signal set (the training multirun's ``runs``; "pending"
-    where there are none) and (a') their held-out curves; (b) R_hat of smart, the minimal
+    """(a) smart / STO per signal set (the training multirun's ``runs``, at one Ku; "no
+    records" where there are none) and (a') their held-out curves; (b) R_hat of smart, the minimal
     model (fitted at each Ku) and STO against Ku; (c) the fitted c1..c4 against Ku."""
     plt = _plt()
     fig, axes = plt.subplots(2, 2, figsize=(10, 7.6))
     (a, a2), (b, c) = axes
     out: dict = {}
     if runs:
-        summary = ablation_summary(runs)
+        summary = summarise_sets(runs)
         draw_ratios(a, summary)
         out["ablation"] = {s["label"]: {"seeds": s["seeds"], "ratios": s["ratios"].tolist(),
                                         "mean": s["mean"], "std": s["std"]} for s in summary}
@@ -801,9 +796,12 @@ def build_ablation(cfg: FiguresConfig) -> dict:
                  for k in keys}
     n_fit = {f["config"]["eval"]["n_flows"] for f in fits.values()}
     if runs:
-        n_seeds = len({x.seed for x in runs})
-        head = (f"(a) {len(runs)} runs under {_shown(cfg.ablation)}, {n_seeds} seed(s) per set; "
-                "smart/STO paired on each run's held-out flows, bars: std over seeds")
+        counts = sorted({s["n"] for s in summarise_sets(runs)})
+        per_set = "-".join(map(str, sorted({counts[0], counts[-1]})))
+        flows, swimmers = runs[0].held_out
+        head = (f"(a) {len(runs)} runs under {_shown(cfg.ablation)}, {per_set} seed(s) per set; "
+                f"smart/STO paired on each run's {flows} held-out flows x {swimmers} swimmers, "
+                "bars: std over seeds (one seed: its SEM, open marker)")
     else:
         head = f"(a) pending: no records under {_shown(cfg.ablation)}"
     return fig_ablation(

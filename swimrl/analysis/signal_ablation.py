@@ -21,7 +21,10 @@ from pathlib import Path
 
 import numpy as np
 
-from .training_curves import read_curves
+from swimrl.evaluation.statistics import mean_std_sem
+from swimrl.physics.signals import SIGNAL_NAMES
+
+from .training_curves import PAPER_EPISODE_FRAMES, read_curves
 
 #: The paper's signal sets, in the order of Fig. ablation(a) (the last one, without S_np,
 #: is its red cross).
@@ -32,11 +35,11 @@ SIGNAL_SETS: tuple[tuple[str, ...], ...] = (
     ("n_theta", "S_np"),
     ("n_r", "n_theta", "S_nn", "omega"),
 )
-_ORDER = ("n_r", "n_theta", "S_nn", "S_np", "omega")
 _TEX = {"n_r": "n_r", "n_theta": r"n_\theta", "S_nn": "S_{nn}", "S_np": "S_{np}",
         "omega": r"\omega"}
-#: frames of one of the paper's training episodes (10 swimmers x 2000 decisions)
-EPISODE_FRAMES = 10 * 2000
+#: Curve colours: none of smart orange, STO green, or the red of the set without S_np.
+_PALETTE = ("tab:blue", "tab:purple", "tab:brown", "tab:olive", "tab:cyan", "tab:pink",
+            "tab:gray")
 
 
 @dataclass(frozen=True)
@@ -44,24 +47,31 @@ class AblationRun:
     """One training run of the multirun and its paired comparison with STO."""
 
     signals: tuple[str, ...]
-    """Observed signals, in :data:`_ORDER`."""
+    """Observed signals, in the order of :data:`SIGNAL_NAMES`."""
     seed: int
     """Training seed."""
     kubo: float
     frames: int
     """Frames trained."""
+    held_out: tuple[int, int]
+    """Held-out flows x swimmers of the comparison."""
     ratio: float
     """``R_smart / R_STO``, paired over the comparison's held-out flows."""
     ratio_sem: float
     smart: float
     sto: float
     curve: dict[str, np.ndarray] | None
-    """``curves.csv`` columns (``frames``, ``eval/R_hat``, ...), or None."""
+    """``curves.csv`` columns (``frames``, ``eval/R_hat``, ...) where it has held-out
+    evaluations, else None."""
 
 
 def canonical(signals) -> tuple[str, ...]:
-    """``signals`` in the paper's order (n_r, n_theta, S_nn, S_np, omega)."""
-    return tuple(s for s in _ORDER if s in set(signals))
+    """``signals`` in the paper's order (n_r, n_theta, S_nn, S_np, omega); raises ValueError
+    on a name that is not a signal."""
+    unknown = sorted(set(signals) - set(SIGNAL_NAMES))
+    if unknown:
+        raise ValueError(f"signals {unknown} are invalid: allowed {list(SIGNAL_NAMES)}")
+    return tuple(s for s in SIGNAL_NAMES if s in set(signals))
 
 
 def set_label(signals: tuple[str, ...]) -> str:
@@ -69,91 +79,116 @@ def set_label(signals: tuple[str, ...]) -> str:
     return "[$" + ", ".join(_TEX[s] for s in canonical(signals)) + "$]"
 
 
+def _run(cmp_path: Path) -> AblationRun | None:
+    """The run in ``cmp_path.parent``, or None without ``metrics.json``; raises ValueError
+    (one line) where the comparison is not this run's."""
+    metrics_path = cmp_path.parent / "metrics.json"
+    if not metrics_path.is_file():
+        return None
+    cmp = json.loads(cmp_path.read_text())
+    metrics = json.loads(metrics_path.read_text())
+    rows = cmp.get("rows") or []
+    policy = [r for r in rows if r["label"].startswith("policy")]
+    if not rows or rows[0]["label"] != "sto" or len(policy) != 1:
+        raise ValueError(f"{cmp_path}: expected STO first and one policy row, got "
+                         f"{[r['label'] for r in rows]}")
+    if policy[0].get("per_flow") != metrics.get("per_flow"):
+        raise ValueError(f"{cmp_path}: its policy row is not the final evaluation in "
+                         f"{metrics_path} (per-flow R_hat differ): a stale comparison")
+    cfg = metrics["config"]
+    curve_path = cmp_path.parent / "curves.csv"
+    curve = read_curves(curve_path) if curve_path.is_file() else {}
+    has_eval = "eval/R_hat" in curve and np.isfinite(curve["eval/R_hat"]).any()
+    return AblationRun(
+        signals=canonical(cfg["signals"]["names"]), seed=int(cfg["seed"]),
+        kubo=float(cfg["flow"]["kubo"]), frames=int(cfg["train"]["total_frames"]),
+        held_out=(int(cmp.get("n_flows", 0)), int(cmp.get("n_swimmers", 0))),
+        ratio=float(policy[0]["ratio_to_first"]), ratio_sem=float(policy[0]["ratio_sem"]),
+        smart=float(policy[0]["R_hat_mean"]), sto=float(rows[0]["R_hat_mean"]),
+        curve=curve if has_eval else None)
+
+
 def read_ablation(root: Path) -> list[AblationRun]:
     """Every run under ``root`` with a ``metrics.json`` and a ``comparison.json``.
 
-    Raises ValueError (one line) where the runs do not form one ablation: different Ku or
-    different budgets (the paper's ablation trains every set alike), or a comparison whose
-    first row is not STO or that has no policy row."""
-    runs = []
-    for cmp_path in sorted(Path(root).rglob("comparison.json")):
-        metrics_path = cmp_path.parent / "metrics.json"
-        if not metrics_path.is_file():
-            continue
-        cmp = json.loads(cmp_path.read_text())
-        cfg = json.loads(metrics_path.read_text())["config"]
-        rows = cmp["rows"]
-        policy = [r for r in rows if r["label"].startswith("policy")]
-        if rows[0]["label"] != "sto" or len(policy) != 1:
-            raise ValueError(f"{cmp_path}: expected STO first and one policy row, got "
-                             f"{[r['label'] for r in rows]}")
-        curve = cmp_path.parent / "curves.csv"
-        runs.append(AblationRun(
-            signals=canonical(cfg["signals"]["names"]), seed=int(cfg["seed"]),
-            kubo=float(cfg["flow"]["kubo"]), frames=int(cfg["train"]["total_frames"]),
-            ratio=float(policy[0]["ratio_to_first"]), ratio_sem=float(policy[0]["ratio_sem"]),
-            smart=float(policy[0]["R_hat_mean"]), sto=float(rows[0]["R_hat_mean"]),
-            curve=read_curves(curve) if curve.is_file() else None))
-    for key in ("kubo", "frames"):
+    Raises ValueError (one line) where the runs do not form one ablation: different Ku,
+    budgets or held-out sizes (the paper's ablation trains and evaluates every set alike), a
+    signal set and seed found twice, or a comparison that is not its run's (first row not
+    STO, no policy row, or a policy row other than the run's final evaluation)."""
+    runs = [r for p in sorted(Path(root).rglob("comparison.json")) if (r := _run(p))]
+    for key in ("kubo", "frames", "held_out"):
         values = sorted({getattr(r, key) for r in runs})
         if len(values) > 1:
             raise ValueError(f"ablation records under {root}: runs differ in {key} ({values}); "
                              "allowed: one value for every run")
+    seen = set()
+    for r in runs:
+        if (r.signals, r.seed) in seen:
+            raise ValueError(f"ablation records under {root}: signals {list(r.signals)} with "
+                             f"seed {r.seed} found twice; allowed: one run per set and seed")
+        seen.add((r.signals, r.seed))
     return runs
 
 
-def summarise(runs: list[AblationRun]) -> list[dict]:
-    """Per signal set (paper's sets first, in order): the seeds, their ratios, mean and std
-    over seeds (0 for one seed)."""
+def summarise_sets(runs: list[AblationRun]) -> list[dict]:
+    """Per signal set (paper's sets first, in order): the seeds, their ratios, the mean and
+    std over seeds, and for a single seed its own paired SEM (``sem_one``)."""
     sets = {r.signals for r in runs}
     ordered = [s for s in SIGNAL_SETS if s in sets] + sorted(sets - set(SIGNAL_SETS))
     out = []
     for s in ordered:
         mine = sorted((r for r in runs if r.signals == s), key=lambda r: r.seed)
         ratios = np.array([r.ratio for r in mine])
+        mean, std, _ = mean_std_sem(ratios)
         out.append({"signals": s, "label": set_label(s), "seeds": [r.seed for r in mine],
-                    "ratios": ratios, "mean": float(ratios.mean()),
-                    "std": float(ratios.std(ddof=1)) if len(ratios) > 1 else 0.0})
+                    "n": len(mine), "ratios": ratios, "mean": mean, "std": std,
+                    "sem_one": mine[0].ratio_sem if len(mine) == 1 else None})
     return out
 
 
 def draw_ratios(ax, summary: list[dict]) -> None:
-    """(a) smart / STO per signal set: each seed a dot, the mean with the std over seeds; a
-    set without S_np is drawn as the paper's red cross; STO = 1 as the green line."""
+    """(a) smart / STO per signal set: each seed a dot, the mean with the std over seeds (a
+    single seed: its paired SEM, open marker); a set without S_np is drawn as the paper's red
+    cross; STO = 1 as the green line."""
     x = np.arange(len(summary))
     for i, s in enumerate(summary):
         no_snp = "S_np" not in s["signals"]
-        ax.plot(np.full(len(s["ratios"]), i), s["ratios"], "o", ms=3, color="0.55", zorder=2)
-        ax.errorbar(i, s["mean"], yerr=s["std"], marker="x" if no_snp else "o", ms=9,
-                    color="tab:red" if no_snp else "tab:orange", capsize=4, mew=2, zorder=3)
+        one = s["n"] == 1
+        ax.plot(np.full(s["n"], i), s["ratios"], "o", ms=3, color="0.55", zorder=2)
+        ax.errorbar(i, s["mean"], yerr=s["sem_one"] if one else s["std"],
+                    marker="x" if no_snp else "o", ms=9, mew=2, capsize=4, zorder=3,
+                    color="tab:red" if no_snp else "tab:orange",
+                    mfc="none" if one and not no_snp else None)
     ax.axhline(1.0, color="tab:green", ls="--", lw=1, label="STO")
-    ax.set_xticks(x, [s["label"] for s in summary], rotation=25, ha="right", fontsize=7)
+    ax.set_xticks(x, [f"{s['label']}\n({s['n']} seed{'s' * (s['n'] > 1)})" for s in summary],
+                  rotation=25, ha="right", fontsize=7)
     ax.set_xlim(-0.5, len(summary) - 0.5)
     ax.set_ylabel(r"$\hat R_{\rm smart} / \hat R_{\rm STO}$")
     ax.legend(fontsize=7, loc="lower left")
 
 
 def draw_curves(ax, runs: list[AblationRun], summary: list[dict]) -> dict[str, float]:
-    """(a') each set's periodic held-out R_hat against training episodes: mean over seeds
-    (on the first seed's evaluation frames), band = std over seeds; returns each set's last
-    mean value."""
+    """(a') each set's periodic held-out R_hat against training episodes (of the paper's
+    2e4 frames): mean over the seeds at the evaluation frames they all have, band = std over
+    seeds; returns each set's last mean value."""
     last = {}
     for i, s in enumerate(summary):
         curves = [r.curve for r in runs if r.signals == s["signals"] and r.curve is not None]
         if not curves:
             continue
-        ok = np.isfinite(curves[0]["eval/R_hat"])
-        x = curves[0]["frames"][ok]
-        ys = []
-        for c in curves:
-            good = np.isfinite(c["eval/R_hat"])
-            ys.append(np.interp(x, c["frames"][good], c["eval/R_hat"][good]))
-        y = np.mean(ys, 0)
-        color = "tab:red" if "S_np" not in s["signals"] else f"C{i}"
-        ax.plot(x / EPISODE_FRAMES, y, marker="o", ms=2, color=color, label=s["label"])
+        evals = [{int(f): y for f, y in zip(c["frames"], c["eval/R_hat"], strict=True)
+                  if np.isfinite(y)} for c in curves]
+        x = np.array(sorted(set.intersection(*(set(e) for e in evals))))
+        if x.size == 0:
+            continue
+        ys = np.array([[e[f] for f in x] for e in evals])
+        y = ys.mean(0)
+        color = "tab:red" if "S_np" not in s["signals"] else _PALETTE[i % len(_PALETTE)]
+        ax.plot(x / PAPER_EPISODE_FRAMES, y, marker="o", ms=2, color=color, label=s["label"])
         if len(ys) > 1:
-            e = np.std(ys, 0, ddof=1)
-            ax.fill_between(x / EPISODE_FRAMES, y - e, y + e, color=color, alpha=0.15, lw=0)
+            e = ys.std(0, ddof=1)
+            ax.fill_between(x / PAPER_EPISODE_FRAMES, y - e, y + e, color=color, alpha=0.15,
+                            lw=0)
         last[s["label"]] = float(y[-1])
     ax.set_xlabel("training episodes (of $2\\times10^4$ frames)")
     ax.set_ylabel(r"periodic held-out $\hat R$")

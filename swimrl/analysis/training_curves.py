@@ -17,6 +17,8 @@ from pathlib import Path
 
 import numpy as np
 
+#: frames of one of the paper's training episodes (10 swimmers x 2000 decisions)
+PAPER_EPISODE_FRAMES = 10 * 2000
 
 def read_curves(path: Path) -> dict[str, np.ndarray]:
     """Columns of a ``curves.csv`` (a run directory or the file) as float arrays (NaN where

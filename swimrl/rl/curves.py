@@ -63,15 +63,13 @@ def read_curves_csv(path: Path) -> dict[int, dict[str, float]]:
     return rows
 
 
-def write_curves(run_dir: Path, out: Path | None = None, tags=CURVE_TAGS) -> Path:
-    """Write ``curves.csv`` (``frames`` then one column per tag; empty where not logged).
-
-    The event files win; steps that only an existing ``out`` holds (logged before the run
-    was resumed from a committed record without its event files) are kept."""
+def write_curves(run_dir: Path, out: Path | None = None, tags=CURVE_TAGS,
+                 base: dict[int, dict[str, float]] | None = None) -> Path:
+    """Write ``curves.csv`` (``frames`` then one column per tag; empty where not logged):
+    the event files' rows over ``base`` (rows logged before a resume whose event files are
+    gone; a step in both keeps the event files' row)."""
     out = Path(out) if out is not None else Path(run_dir) / "curves.csv"
-    rows = read_scalars(Path(run_dir), tags)
-    if out.is_file():
-        rows = {**read_curves_csv(out), **rows}
+    rows = {**(base or {}), **read_scalars(Path(run_dir), tags)}
     tmp = out.with_suffix(out.suffix + ".tmp")
     with open(tmp, "w", newline="") as fh:
         w = csv.writer(fh)

@@ -71,7 +71,7 @@ def clean_run_dir(out: Path) -> None:
     for name in ("checkpoints", "tb", "policies"):
         if (out / name).is_dir():
             shutil.rmtree(out / name)
-    for name in ("policy.pt", "metrics.json"):
+    for name in ("policy.pt", "metrics.json", "curves.csv", "comparison.json", "comparison.md"):
         (out / name).unlink(missing_ok=True)
 
 

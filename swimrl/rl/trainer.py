@@ -42,7 +42,7 @@ from swimrl.policies.files import checkpoint_path, load_file, policy_meta, polic
 from swimrl.policies.networks import deterministic_actor, log_std
 from swimrl.rl import builders as rlb
 from swimrl.rl.checkpoint import capture_rng, restore_rng, save_checkpoint
-from swimrl.rl.curves import write_curves
+from swimrl.rl.curves import read_curves_csv, write_curves
 from swimrl.rl.plan import TrainConfig, TrainPlan
 
 log = logging.getLogger(__name__)
@@ -84,6 +84,7 @@ class PPOTrainer:
         self.logger = None
         self.last_eval: dict | None = None
         self.last_train_r_hat: float | None = None
+        self.curve_base: dict[int, dict[str, float]] | None = None  # see restore
 
     # -- state --------------------------------------------------------------------------------
     @property
@@ -109,7 +110,7 @@ class PPOTrainer:
         )
         if self.logger is not None:
             self.logger.experiment.flush()
-            write_curves(self.run_dir)
+            write_curves(self.run_dir, base=self.curve_base)
         return path
 
     def restore(self, path: Path) -> dict:
@@ -123,6 +124,12 @@ class PPOTrainer:
             sch.load_state_dict(st)
         restore_rng(ck["rng"], self.swimmer_env.generator)
         self.counters = dict(ck["counters"])
+        # the curve up to the checkpoint, kept where the event files may be gone (a run
+        # resumed from its committed record: checkpoint + curves.csv)
+        curves = self.run_dir / "curves.csv"
+        if curves.is_file():
+            self.curve_base = {step: row for step, row in read_curves_csv(curves).items()
+                               if step <= self.counters["frames"]}
         return ck
 
     def save_policy(self, path: Path | None = None) -> Path:
