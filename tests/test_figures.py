@@ -207,6 +207,10 @@ def test_signal_ablation_records_summary_and_panel(tmp_path):
     # mean over the seeds at the frames both evaluated (the 500 of seed 0 alone is left out)
     assert out["curves_last"][summary[0]["label"]] == pytest.approx(0.61)
     assert summary[2]["label"] not in out["curves_last"]  # no held-out evaluations
+    table = out["table"].splitlines()
+    assert table[0].startswith("Ku = 10, 0.001M frames per run") and len(table) == 4 + 3
+    assert table[4].startswith("| n_r, n_theta, S_nn, S_np, omega | 0, 1 | 0.650, 0.620 |")
+    assert table[4].endswith("| **1.270 ± 0.042** |")
     assert (tmp_path / "a.png").stat().st_size > 1000
 
     def refused(match):

@@ -35,7 +35,14 @@ from swimrl.runtime import Runtime
 
 from .performance import load, summarise
 from .policy_maps import binned_mean, snn_extremes
-from .signal_ablation import AblationRun, draw_curves, draw_ratios, read_ablation, summarise_sets
+from .signal_ablation import (
+    AblationRun,
+    ablation_markdown,
+    draw_curves,
+    draw_ratios,
+    read_ablation,
+    summarise_sets,
+)
 from .training_curves import PAPER_EPISODE_FRAMES, read_curves
 
 #: Bump when a cached array's meaning changes.
@@ -758,6 +765,7 @@ def fig_ablation(kus: np.ndarray, r: dict[str, np.ndarray], err: dict[str, np.nd
         out["ablation"] = {s["label"]: {"seeds": s["seeds"], "ratios": s["ratios"].tolist(),
                                         "mean": s["mean"], "std": s["std"]} for s in summary}
         out["curves_last"] = draw_curves(a2, runs, summary)
+        out["table"] = ablation_markdown(runs, summary)
         kubo, frames = runs[0].kubo, runs[0].frames
         a.set_title(f"(a) signal ablation, Ku = {kubo:g}, {frames / 1e6:g}M frames per run",
                     fontsize=9)
@@ -804,12 +812,15 @@ def build_ablation(cfg: FiguresConfig) -> dict:
                 "bars: std over seeds (one seed: its SEM, open marker)")
     else:
         head = f"(a) pending: no records under {_shown(cfg.ablation)}"
-    return fig_ablation(
+    drawn = fig_ablation(
         kus, r, err, coeffs, coeff_err, cfg.out / "ablation.png",
         f"{head}\n(b) shipped smart policies; the minimal model with the coefficients fitted to "
         f"them at each Ku; STO; {cfg.robust_flows} flows x {cfg.robust_swimmers} swimmers, "
         f"bars: std over flows; (c) fits on {'/'.join(map(str, sorted(n_fit)))} flows x 100 "
         "swimmers, bars: SEM over flows", runs=runs)
+    if "table" in drawn:
+        (cfg.out / "ablation_signals.md").write_text(drawn["table"])
+    return drawn
 
 
 #: Figure name -> builder, in build order.

@@ -146,6 +146,27 @@ def summarise_sets(runs: list[AblationRun]) -> list[dict]:
     return out
 
 
+def ablation_markdown(runs: list[AblationRun], summary: list[dict]) -> str:
+    """The table of Fig. ablation (a): per signal set, each seed's smart and STO R_hat and
+    paired ratio, and the mean and std over seeds of the ratio."""
+    flows, swimmers = runs[0].held_out
+    head = (f"Ku = {runs[0].kubo:g}, {runs[0].frames / 1e6:g}M frames per run; each run's "
+            f"smart and STO on its {flows} held-out flows x {swimmers} swimmers (evaluation "
+            "seed 1000000 + seed)\n\n"
+            "| signals | seeds | smart R̂ per seed | STO R̂ per seed | smart / STO per seed "
+            "(paired ± SEM) | mean ± std over seeds |\n|---|---|---|---|---|---|\n")
+    lines = []
+    for s in summary:
+        mine = sorted((r for r in runs if r.signals == s["signals"]), key=lambda r: r.seed)
+        lines.append(
+            f"| {', '.join(s['signals'])} | {', '.join(map(str, s['seeds']))} | "
+            + ", ".join(f"{r.smart:.3f}" for r in mine) + " | "
+            + ", ".join(f"{r.sto:.3f}" for r in mine) + " | "
+            + ", ".join(f"{r.ratio:.3f} ± {r.ratio_sem:.3f}" for r in mine)
+            + f" | **{s['mean']:.3f} ± {s['std']:.3f}** |")
+    return head + "\n".join(lines) + "\n"
+
+
 def draw_ratios(ax, summary: list[dict]) -> None:
     """(a) smart / STO per signal set: each seed a dot, the mean with the std over seeds (a
     single seed: its paired SEM, open marker); a set without S_np is drawn as the paper's red
