@@ -16,6 +16,7 @@ from __future__ import annotations
 import hashlib
 import json
 import math
+import textwrap
 import time
 from collections.abc import Callable
 from dataclasses import asdict, dataclass, replace
@@ -776,7 +777,7 @@ def fig_ablation(kus: np.ndarray, r: dict[str, np.ndarray], err: dict[str, np.nd
                     transform=ax.transAxes)
             ax.set_axis_off()
     _draw_minimal(b, c, kus, r, err, coeffs, coeff_err)
-    fig.suptitle(title, fontsize=8)
+    fig.suptitle("\n".join(textwrap.fill(line, 150) for line in title.splitlines()), fontsize=8)
     fig.tight_layout()
     _save(fig, path)
     return {"kubo": kus.tolist(), **{k: np.asarray(v).tolist() for k, v in r.items()},
