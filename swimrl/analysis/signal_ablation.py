@@ -21,6 +21,7 @@ from pathlib import Path
 
 import numpy as np
 
+from swimrl.evaluation.records import markdown_table
 from swimrl.evaluation.statistics import mean_std_sem
 from swimrl.physics.signals import SIGNAL_NAMES
 
@@ -150,21 +151,20 @@ def ablation_markdown(runs: list[AblationRun], summary: list[dict]) -> str:
     """The table of Fig. ablation (a): per signal set, each seed's smart and STO R_hat and
     paired ratio, and the mean and std over seeds of the ratio."""
     flows, swimmers = runs[0].held_out
-    head = (f"Ku = {runs[0].kubo:g}, {runs[0].frames / 1e6:g}M frames per run; each run's "
-            f"smart and STO on its {flows} held-out flows x {swimmers} swimmers (evaluation "
-            "seed 1000000 + seed)\n\n"
-            "| signals | seeds | smart R̂ per seed | STO R̂ per seed | smart / STO per seed "
-            "(paired ± SEM) | mean ± std over seeds |\n|---|---|---|---|---|---|\n")
-    lines = []
+    intro = (f"Ku = {runs[0].kubo:g}, {runs[0].frames / 1e6:g}M frames per run; each run's "
+             f"smart and STO on its {flows} held-out flows x {swimmers} swimmers (evaluation "
+             "seed 1000000 + seed)\n\n")
+    head = ["signals", "seeds", "smart R̂ per seed", "STO R̂ per seed",
+            "smart / STO per seed (paired ± SEM)", "mean ± std over seeds"]
+    rows = []
     for s in summary:
         mine = sorted((r for r in runs if r.signals == s["signals"]), key=lambda r: r.seed)
-        lines.append(
-            f"| {', '.join(s['signals'])} | {', '.join(map(str, s['seeds']))} | "
-            + ", ".join(f"{r.smart:.3f}" for r in mine) + " | "
-            + ", ".join(f"{r.sto:.3f}" for r in mine) + " | "
-            + ", ".join(f"{r.ratio:.3f} ± {r.ratio_sem:.3f}" for r in mine)
-            + f" | **{s['mean']:.3f} ± {s['std']:.3f}** |")
-    return head + "\n".join(lines) + "\n"
+        rows.append([", ".join(s["signals"]), ", ".join(map(str, s["seeds"])),
+                     ", ".join(f"{r.smart:.3f}" for r in mine),
+                     ", ".join(f"{r.sto:.3f}" for r in mine),
+                     ", ".join(f"{r.ratio:.3f} ± {r.ratio_sem:.3f}" for r in mine),
+                     f"**{s['mean']:.3f} ± {s['std']:.3f}**"])
+    return intro + markdown_table(head, rows)
 
 
 def draw_ratios(ax, summary: list[dict]) -> None:

@@ -4,8 +4,8 @@ One row per logged step (frames), one column per tag; a step logged twice (a res
 repeats the updates after its last checkpoint) keeps the value written last. The CSV is
 small enough to commit next to the run's policy, so training-curve figures can be drawn
 from a fresh clone without the event files; a run resumed from such a committed record (its
-checkpoint and ``curves.csv``, no event files) keeps the rows of the CSV that its new event
-files do not hold, so its curve stays whole.
+checkpoint and ``curves.csv``, no event files) passes the CSV's rows up to its checkpoint as
+``base`` to :func:`write_curves`, so its curve stays whole.
 
     python -m swimrl.rl.curves RUN_DIR [--out RUN_DIR/curves.csv]
 """
