@@ -36,7 +36,7 @@ from pathlib import Path
 
 import numpy as np
 
-from swimrl.evaluation.records import markdown_table, read_npz, write_npz
+from swimrl.evaluation.records import markdown_table, read_curves, read_npz, write_npz
 from swimrl.evaluation.rollout import EvalSetup, EvalSizes
 from swimrl.evaluation.statistics import paired_ratio
 from swimrl.flows.build import StoredRunSpec
@@ -56,7 +56,6 @@ from .figures import (
     record_strategies,
 )
 from .policy_maps import binned_mean
-from .training_curves import read_curves
 
 #: Largest aspect ratio drawn for a glyph (the swimmers' own reach ~10 at |Lambda| = 0.98).
 GLYPH_ASPECT_MAX = 4.0

@@ -18,6 +18,7 @@ import json
 import math
 import textwrap
 import time
+from collections import Counter
 from collections.abc import Callable
 from dataclasses import asdict, dataclass, replace
 from pathlib import Path
@@ -25,7 +26,7 @@ from pathlib import Path
 import numpy as np
 
 from swimrl.env import EnvParams, SwimmerEnv
-from swimrl.evaluation.records import read_npz, write_npz
+from swimrl.evaluation.records import read_curves, read_npz, write_npz
 from swimrl.evaluation.rollout import EvalSetup, EvalSizes, chunk_seed, evaluate_shared
 from swimrl.evaluation.trajectories import TrajectoryRecorder
 from swimrl.flows.build import StochasticSpec
@@ -44,7 +45,7 @@ from .signal_ablation import (
     read_ablation,
     summarise_sets,
 )
-from .training_curves import PAPER_EPISODE_FRAMES, read_curves
+from .training_curves import PAPER_EPISODE_FRAMES
 
 #: Bump when a cached array's meaning changes.
 CACHE_VERSION = 1
@@ -805,7 +806,7 @@ def build_ablation(cfg: FiguresConfig) -> dict:
                  for k in keys}
     n_fit = {f["config"]["eval"]["n_flows"] for f in fits.values()}
     if runs:
-        counts = sorted({s["n"] for s in summarise_sets(runs)})
+        counts = sorted(set(Counter(r.signals for r in runs).values()))
         per_set = "-".join(map(str, sorted({counts[0], counts[-1]})))
         flows, swimmers = runs[0].held_out
         head = (f"(a) {len(runs)} runs under {_shown(cfg.ablation)}, {per_set} seed(s) per set; "

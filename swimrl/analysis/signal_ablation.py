@@ -21,11 +21,11 @@ from pathlib import Path
 
 import numpy as np
 
-from swimrl.evaluation.records import markdown_table
+from swimrl.evaluation.records import markdown_table, read_curves
 from swimrl.evaluation.statistics import mean_std_sem
 from swimrl.physics.signals import SIGNAL_NAMES
 
-from .training_curves import PAPER_EPISODE_FRAMES, read_curves
+from .training_curves import PAPER_EPISODE_FRAMES
 
 #: The paper's signal sets, in the order of Fig. ablation(a) (the last one, without S_np,
 #: is its red cross).

@@ -12,25 +12,16 @@ there.
 from __future__ import annotations
 
 import argparse
-import csv
 from pathlib import Path
 
 import numpy as np
 
+from swimrl.evaluation.records import read_curves
+
+__all__ = ["PAPER_EPISODE_FRAMES", "plot_training_curves", "read_curves"]
+
 #: frames of one of the paper's training episodes (10 swimmers x 2000 decisions)
 PAPER_EPISODE_FRAMES = 10 * 2000
-
-def read_curves(path: Path) -> dict[str, np.ndarray]:
-    """Columns of a ``curves.csv`` (a run directory or the file) as float arrays (NaN where
-    empty)."""
-    path = Path(path)
-    if path.is_dir():
-        path = path / "curves.csv"
-    with open(path, newline="") as fh:
-        rows = list(csv.DictReader(fh))
-    if not rows:
-        return {}
-    return {k: np.array([float(r[k]) if r[k] else np.nan for r in rows]) for k in rows[0]}
 
 
 def plot_training_curves(

@@ -72,6 +72,19 @@ def read_npz(path: Path) -> dict:
         return {k: z[k] for k in z.files}
 
 
+def read_curves(path: Path) -> dict[str, np.ndarray]:
+    """Columns of a ``curves.csv`` (``swimrl-train``; a run directory or the file) as float
+    arrays, NaN where a cell is empty."""
+    path = Path(path)
+    if path.is_dir():
+        path = path / "curves.csv"
+    with open(path, newline="") as fh:
+        rows = list(csv.DictReader(fh))
+    if not rows:
+        return {}
+    return {k: np.array([float(r[k]) if r[k] else np.nan for r in rows]) for k in rows[0]}
+
+
 def markdown_table(head: Sequence[str], rows: Sequence[Sequence[str]]) -> str:
     """``| a | b |`` lines: a header, its ``|---|`` rule and one line per row."""
     lines = ["| " + " | ".join(head) + " |", "|" + "---|" * len(head)]

@@ -18,6 +18,10 @@ import math
 import os
 from pathlib import Path
 
+import numpy as np
+
+from swimrl.evaluation.records import read_curves
+
 #: Tags exported by default (see the monitoring table of docs/training.md).
 CURVE_TAGS = (
     "eval/R_hat",
@@ -54,13 +58,12 @@ def read_scalars(run_dir: Path, tags=CURVE_TAGS) -> dict[int, dict[str, float]]:
 
 
 def read_curves_csv(path: Path) -> dict[int, dict[str, float]]:
-    """``{frames: {tag: value}}`` of a ``curves.csv`` (empty cells left out)."""
-    rows: dict[int, dict[str, float]] = {}
-    with open(path, newline="") as fh:
-        for rec in csv.DictReader(fh):
-            step = int(rec.pop("frames"))
-            rows[step] = {t: float(v) for t, v in rec.items() if v}
-    return rows
+    """``{frames: {tag: value}}`` of a ``curves.csv`` (empty cells left out): the rows of
+    :func:`swimrl.evaluation.records.read_curves`."""
+    cols = read_curves(path)
+    tags = [t for t in cols if t != "frames"]
+    return {int(f): {t: float(cols[t][i]) for t in tags if np.isfinite(cols[t][i])}
+            for i, f in enumerate(cols.get("frames", []))}
 
 
 def write_curves(run_dir: Path, out: Path | None = None, tags=CURVE_TAGS,
