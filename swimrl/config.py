@@ -292,6 +292,7 @@ def train_config(cfg: DictConfig) -> TrainConfig:
             hidden=tuple(_int(h) for h in model.hidden),
             activation=str(model.activation),
             init_std=_float(model.init_std),
+            min_std=_float(model.min_std),
         ),
         resume=cfg.resume,
         overwrite=cfg.overwrite,

@@ -46,6 +46,8 @@ CASES = [
     (TRAIN, ["train.total_frames=inf"], "train.total_frames=inf"),
     (TRAIN, ["loss.gamma=nan"], "loss.gamma"),
     (TRAIN, ["model.init_std=inf"], "model.init_std"),
+    (TRAIN, ["model.min_std=2.0"], "model.min_std=2.0"),
+    (TRAIN, ["model.min_std=0"], "model.min_std=0"),
     (TRAIN, ["resume=maybe"], "resume"),
     (EVAL, ["seed=-1"], "seed=-1"),
     (TRAIN, ["seed=-1"], "seed=-1"),

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import math
 from pathlib import Path
 
 import pytest
@@ -171,3 +172,27 @@ def test_gain_scan_gain_one_is_the_policy_and_gain_zero_is_spherical(pretrained,
     with pytest.raises(ValueError, match="gains=.*allowed"):
         gain_scan_config(compose_cfg(SMALL + ["policy=pretrained/ku10", "gains=[-1]"],
                                      name="gain_scan"))
+
+
+@pytest.mark.parametrize("min_std", [1e-4, 0.5])
+def test_min_std_bounds_sigma_of_the_sampled_actions(min_std):
+    """sigma = max(exp(log sigma), min_std): the log-probability of a sampled action is that of
+    Lambda_max tanh(u), u ~ N(mu, sigma^2), computed here by hand."""
+    actor = tanh_normal_actor(5, action_spec(0.98), init_std=1.0, min_std=min_std)
+    scale_module = actor.module[0].module[1]
+    with torch.no_grad():
+        scale_module.state_independent_scale.fill_(math.log(0.1))
+    sigma = max(0.1, min_std)
+    td = actor(TensorDict({"observation": torch.randn(256, 5)}, [256]))
+    assert torch.allclose(td["scale"], torch.full_like(td["scale"], sigma), rtol=1e-5)
+    mu, lam = td["loc"], td["action"]
+    u = torch.atanh(lam / 0.98)
+    by_hand = (
+        torch.distributions.Normal(mu, sigma).log_prob(u)
+        - torch.log(0.98 * (1 - torch.tanh(u) ** 2))
+    ).sum(-1)
+    assert torch.allclose(td["action_log_prob"], by_hand, atol=2e-3)
+    # below the bound log sigma gets no gradient
+    td["action_log_prob"].sum().backward()
+    grad = scale_module.state_independent_scale.grad
+    assert (grad.abs().max() == 0) == (min_std > 0.1)

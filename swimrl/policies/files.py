@@ -107,6 +107,7 @@ def policy_meta(params: EnvParams, model: ModelSpec, dtype: str) -> dict:
             "hidden": [int(h) for h in model.hidden],
             "activation": str(model.activation),
             "init_std": float(model.init_std),
+            "min_std": float(model.min_std),
             "shape_factor_max": float(params.shape_factor_max),
             "dtype": str(dtype),
         },
@@ -216,6 +217,7 @@ def load_policy(spec: str, params: EnvParams) -> TensorDictModule:
         hidden=[int(h) for h in model["hidden"]],
         activation=str(model["activation"]),
         init_std=float(model.get("init_std", 1.0)),
+        min_std=float(model.get("min_std", 1e-4)),
         dtype=dtype,
     )
     actor.load_state_dict(data["actor"])

@@ -2,7 +2,8 @@ r"""Actor and critic networks (paper App. "Reinforcement learning algorithm").
 
 * Actor: a Gaussian in the pre-``tanh`` space, ``u ~ N(mu(s), sigma^2)``, with the mean
   ``mu(s)`` from a fully connected ``tanh`` MLP (2 x 64 by default) on the ``observation``
-  key and a state-independent trainable ``sigma = exp(log_sigma)``; the action is
+  key and a state-independent trainable ``sigma = max(exp(log_sigma), sigma_min)`` (TorchRL's
+  ``scale_lb``; ``model.min_std``, 1e-4 by default, i.e. no bound in practice); the action is
   ``Lambda = Lambda_max tanh(u)`` (TorchRL ``TanhNormal`` with ``low``, ``high`` read from the
   environment's action spec ``[-Lambda_max, Lambda_max]``, as in TorchRL's
   ``sota-implementations/ppo/utils_mujoco.py``), so that the probability ratio and the
@@ -35,11 +36,13 @@ ACTIVATIONS = {"tanh": nn.Tanh, "relu": nn.ReLU, "elu": nn.ELU}
 
 @dataclass(frozen=True)
 class ModelSpec:
-    """Shape of actor and critic (``model.*``): hidden widths, activation, initial ``sigma``."""
+    """Shape of actor and critic (``model.*``): hidden widths, activation, initial ``sigma``
+    and its lower bound ``sigma_min``."""
 
     hidden: tuple[int, ...] = (64, 64)
     activation: str = "tanh"
     init_std: float = 1.0
+    min_std: float = 1e-4
 
     def __post_init__(self) -> None:
         require(len(self.hidden) > 0, "model.hidden", list(self.hidden),
@@ -48,6 +51,8 @@ class ModelSpec:
             as_int("model.hidden", h)
         one_of("model.activation", self.activation, ACTIVATIONS)
         as_float("model.init_std", self.init_std, lambda v: v > 0, "> 0")
+        as_float("model.min_std", self.min_std, lambda v: 0 < v <= self.init_std,
+                 f"in (0, model.init_std = {self.init_std}]")
 
 
 def make_mlp(
@@ -94,6 +99,7 @@ def tanh_normal_actor(
     hidden: Sequence[int] = (64, 64),
     activation: str = "tanh",
     init_std: float = 1.0,
+    min_std: float = 1e-4,
     device=None,
     dtype=torch.float32,
 ) -> ProbabilisticActor:
@@ -101,11 +107,12 @@ def tanh_normal_actor(
 
     ``spec`` is the unbatched action spec of the environment (``Lambda`` in ``[low, high]``);
     the ``TanhNormal`` bounds are read from it. Writes ``action`` and ``action_log_prob``.
-    ``actor.module[0].module[0]`` is the mean network ``mu(s)`` (see :func:`mean_network`).
+    ``actor.module[0].module[0]`` is the mean network ``mu(s)`` (see :func:`mean_network`);
+    ``sigma = max(exp(log_sigma), min_std)`` (below the bound ``log_sigma`` gets no gradient).
     """
     mean = make_mlp(n_obs, 1, hidden, activation, 0.01, device, dtype)
     scale = AddStateIndependentNormalScale(
-        1, scale_mapping="exp", init_value=math.log(init_std), device=device
+        1, scale_mapping="exp", scale_lb=min_std, init_value=math.log(init_std), device=device
     ).to(dtype)
     net = TensorDictModule(
         nn.Sequential(mean, scale), in_keys=["observation"], out_keys=["loc", "scale"]

@@ -70,6 +70,7 @@ def make_actor(cfg: TrainConfig, env: EnvBase, device, dtype):
         hidden=[int(h) for h in cfg.model.hidden],
         activation=str(cfg.model.activation),
         init_std=float(cfg.model.init_std),
+        min_std=float(cfg.model.min_std),
         device=device,
         dtype=dtype,
     )

@@ -261,6 +261,7 @@ class PPOTrainer:
                     r_hat_train = float(dist.mean()) / ref
                 lrs = [s.get_last_lr()[0] for s in self.schedulers]
                 action_abs = data["action"].abs().mean()
+                min_std = self.cfg.model.min_std
                 stats = self.update(data)
                 self._stop_if_nonfinite(stats)
                 collector.update_policy_weights_()
@@ -275,7 +276,9 @@ class PPOTrainer:
                         "train/lr_actor": lrs[0],
                         "train/lr_critic": lrs[1],
                         "train/episodes": self.episodes,
-                        "policy/std": float(log_std(self.actor).detach().exp().mean()),
+                        "policy/std": float(
+                            log_std(self.actor).detach().exp().clamp_min(min_std).mean()
+                        ),
                         "policy/abs_action_mean": float(action_abs),
                         "time/collect_s": t_collected - t_prev,
                         "time/update_s": t_done - t_collected,
