@@ -42,8 +42,9 @@ LEGACY_KEYS = {
 }
 #: Keys added later, with the value that reproduces what the code did before they existed
 #: (stochastic flow: the readings of the paper's specification, conf/flow/stochastic.yaml;
-#: replay: decoding on the run's grid, one start per flow).
+#: replay: decoding on the run's grid, one start per flow; every flow: no bound on sigma).
 ADDED_KEYS = {
+    "*": {"model.min_std": 1e-4},  # every flow
     "stochastic": {
         "flow.amplitudes": "stationary",
         "flow.basis": "redrawn",
@@ -60,7 +61,8 @@ def upgrade_config(config: dict) -> dict:
     reproduces the old behaviour; the values present are unchanged."""
     out = _copy(config)
     flow = out.get("flow") if isinstance(out.get("flow"), dict) else None
-    for key, value in ADDED_KEYS.get(flow.get("name") if flow else None, {}).items():
+    added = {**ADDED_KEYS["*"], **ADDED_KEYS.get(flow.get("name") if flow else None, {})}
+    for key, value in added.items():
         *path, last = key.split(".")
         node = _node(out, path)
         if node is not None:
