@@ -385,6 +385,19 @@ def test_bigbatch_preset_extends_default():
     assert plan.n_updates == 10_000_000 // 51200 and plan.gradient_steps_per_update == 80
 
 
+def test_long_floor_preset_is_long_with_a_sigma_bound():
+    """``train_preset=long_floor``: ``long`` (1e8 frames, linear decay) with ``sigma >= 0.3``."""
+    from hydra import compose, initialize_config_module
+
+    with initialize_config_module("swimrl.conf", version_base="1.3"):
+        long = compose("train", overrides=["train_preset=long"])
+        floor = compose("train", overrides=["train_preset=long_floor"])
+    assert floor.model.min_std == 0.3 and long.model.min_std == 1e-4
+    assert train_config(floor).model.min_std == 0.3
+    floor.model.min_std = long.model.min_std
+    assert floor == long
+
+
 def test_training_in_a_stored_dns_run(compose_cfg, tmp_path):
     """``swimrl-train flow=dns_replay``: PPO on a (tiny) stored DNS run, swimmers in its units,
     flows sharing starts; evaluated on another run that training never saw (``eval_flow``)."""
