@@ -33,7 +33,13 @@ from tensordict.nn import TensorDictModule
 
 from swimrl.env import EnvParams
 from swimrl.errors import BadFileError, ConfigError
-from swimrl.policies.networks import ModelSpec, action_spec, deterministic_actor, tanh_normal_actor
+from swimrl.policies.networks import (
+    NO_STD_BOUND,
+    ModelSpec,
+    action_spec,
+    deterministic_actor,
+    tanh_normal_actor,
+)
 
 CHECKPOINT_FORMAT = "swimrl-ppo-checkpoint/1"
 POLICY_FORMAT = "swimrl-ppo-policy/1"
@@ -217,7 +223,7 @@ def load_policy(spec: str, params: EnvParams) -> TensorDictModule:
         hidden=[int(h) for h in model["hidden"]],
         activation=str(model["activation"]),
         init_std=float(model.get("init_std", 1.0)),
-        min_std=float(model.get("min_std", 1e-4)),
+        min_std=float(model.get("min_std", NO_STD_BOUND)),
         dtype=dtype,
     )
     actor.load_state_dict(data["actor"])

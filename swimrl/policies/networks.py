@@ -32,6 +32,9 @@ from torchrl.modules import ProbabilisticActor, TanhNormal, ValueOperator
 from swimrl.errors import as_float, as_int, one_of, require
 
 ACTIVATIONS = {"tanh": nn.Tanh, "relu": nn.ReLU, "elu": nn.ELU}
+#: ``model.min_std`` that bounds nothing in practice (TorchRL's default ``scale_lb``): the
+#: behaviour before the bound existed.
+NO_STD_BOUND = 1e-4
 
 
 @dataclass(frozen=True)
@@ -42,7 +45,7 @@ class ModelSpec:
     hidden: tuple[int, ...] = (64, 64)
     activation: str = "tanh"
     init_std: float = 1.0
-    min_std: float = 1e-4
+    min_std: float = NO_STD_BOUND
 
     def __post_init__(self) -> None:
         require(len(self.hidden) > 0, "model.hidden", list(self.hidden),
@@ -99,7 +102,7 @@ def tanh_normal_actor(
     hidden: Sequence[int] = (64, 64),
     activation: str = "tanh",
     init_std: float = 1.0,
-    min_std: float = 1e-4,
+    min_std: float = NO_STD_BOUND,
     device=None,
     dtype=torch.float32,
 ) -> ProbabilisticActor:
@@ -133,9 +136,12 @@ def mean_network(actor: ProbabilisticActor) -> nn.Sequential:
     return actor.module[0].module[0]
 
 
-def log_std(actor: ProbabilisticActor) -> torch.Tensor:
-    """``log sigma`` of the state-independent Gaussian (pre-``tanh``) of the actor."""
-    return actor.module[0].module[1].state_independent_scale
+@torch.no_grad()
+def policy_std(actor: ProbabilisticActor) -> torch.Tensor:
+    """``sigma`` of the state-independent Gaussian (pre-``tanh``) of the actor, as its scale
+    module gives it to the ``TanhNormal`` (the bound ``min_std`` applied)."""
+    scale = actor.module[0].module[1]
+    return scale(scale.state_independent_scale)[1]
 
 
 def value_critic(

@@ -30,6 +30,7 @@ import torch
 
 from swimrl.errors import BadFileError
 from swimrl.policies.files import CHECKPOINT_FORMAT, atomic_save, checkpoint_path, load_file
+from swimrl.policies.networks import NO_STD_BOUND
 
 log = logging.getLogger(__name__)
 
@@ -44,7 +45,7 @@ LEGACY_KEYS = {
 #: (stochastic flow: the readings of the paper's specification, conf/flow/stochastic.yaml;
 #: replay: decoding on the run's grid, one start per flow; every flow: no bound on sigma).
 ADDED_KEYS = {
-    "*": {"model.min_std": 1e-4},  # every flow
+    "*": {"model.min_std": NO_STD_BOUND},  # every flow
     "stochastic": {
         "flow.amplitudes": "stationary",
         "flow.basis": "redrawn",

@@ -39,7 +39,7 @@ from tqdm.auto import tqdm
 from swimrl.errors import NonFiniteError
 from swimrl.evaluation.rollout import EvalSetup, evaluate
 from swimrl.policies.files import checkpoint_path, load_file, policy_meta, policy_path, save_policy
-from swimrl.policies.networks import deterministic_actor, log_std
+from swimrl.policies.networks import deterministic_actor, policy_std
 from swimrl.rl import builders as rlb
 from swimrl.rl.checkpoint import capture_rng, restore_rng, save_checkpoint
 from swimrl.rl.curves import read_curves_csv, write_curves
@@ -261,7 +261,6 @@ class PPOTrainer:
                     r_hat_train = float(dist.mean()) / ref
                 lrs = [s.get_last_lr()[0] for s in self.schedulers]
                 action_abs = data["action"].abs().mean()
-                min_std = self.cfg.model.min_std
                 stats = self.update(data)
                 self._stop_if_nonfinite(stats)
                 collector.update_policy_weights_()
@@ -276,9 +275,7 @@ class PPOTrainer:
                         "train/lr_actor": lrs[0],
                         "train/lr_critic": lrs[1],
                         "train/episodes": self.episodes,
-                        "policy/std": float(
-                            log_std(self.actor).detach().exp().clamp_min(min_std).mean()
-                        ),
+                        "policy/std": float(policy_std(self.actor).mean()),
                         "policy/abs_action_mean": float(action_abs),
                         "time/collect_s": t_collected - t_prev,
                         "time/update_s": t_done - t_collected,
