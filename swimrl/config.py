@@ -199,6 +199,7 @@ def compare_config(cfg: DictConfig) -> CompareConfig:
         variants=variants,
         shared_flows=as_bool("compare.shared_flows", c.get("shared_flows", False)),
         overwrite=as_bool("overwrite", cfg.overwrite),
+        resume=as_bool("compare.resume", c.get("resume", False)),
     )
 
 

@@ -7,6 +7,9 @@ constant shape factors, ``naive_scan.png`` (``R_hat`` against ``Lambda``).
     swimrl-compare flow.kubo=10 'compare.strategies=[naive,sto,policy]' \
         'compare.policies=[pretrained/ku10,outputs/train/my_run]'   # + trained policies
     swimrl-naive-scan flow.kubo=10                   # constant Lambda over [-0.98, 0.98]
+
+An interrupted comparison continues with the same command plus ``compare.resume=true``
+(``comparison.partial.json`` in the run directory holds the flow chunks already done).
 """
 
 from __future__ import annotations
@@ -19,25 +22,31 @@ from omegaconf import DictConfig
 from swimrl.analysis.plots import plot_naive_scan
 from swimrl.cli import command, run_dir
 from swimrl.config import compare_config
-from swimrl.evaluation.compare import CompareConfig, compare
+from swimrl.errors import ConfigError
+from swimrl.evaluation.compare import PARTIAL, CompareConfig, compare
 from swimrl.evaluation.records import refuse_overwrite, write_comparison
 
 log = logging.getLogger(__name__)
 
 
 def check(cfg: DictConfig, out: Path | None) -> CompareConfig:
-    """Parse and check the config; refuse to replace a result."""
+    """Parse and check the config; refuse to replace a result or to drop an unfinished one."""
     c = compare_config(cfg)
     if out is not None:
         refuse_overwrite(out / "comparison.json", c.overwrite)
+        if (out / PARTIAL).exists() and not (c.resume or c.overwrite):
+            raise ConfigError(f"compare.resume=false but {out / PARTIAL} holds an unfinished "
+                              "comparison: allowed compare.resume=true (continue it) or "
+                              "overwrite=true (start again)")
     return c
 
 
 def _main(cfg: DictConfig) -> dict:
     out = run_dir()
     c = check(cfg, out)
-    record = compare(c)
+    record = compare(c, out / PARTIAL)
     print(write_comparison(record, out), flush=True)
+    (out / PARTIAL).unlink(missing_ok=True)
     plot_naive_scan(record, out / "naive_scan.png")
     log.info("wrote %s", out / "comparison.json")
     return record

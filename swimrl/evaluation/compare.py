@@ -6,21 +6,39 @@ the other or, with ``shared_flows``, all in one environment
 (:func:`~swimrl.evaluation.rollout.evaluate_shared`). Besides each strategy's ``R_hat``
 (mean +- SEM over flows) the record holds the paired ratio of its mean to the first
 strategy's, with the delta-method standard error (:mod:`swimrl.evaluation.statistics`).
+
+A long comparison (the paper's 100 flows x 1000 swimmers) is resumable: after every chunk
+of ``eval.flows_per_batch`` flows the results so far go to ``comparison.partial.json``;
+``compare.resume=true`` continues from it, simulating only the chunks not yet done, and the
+final record is the uninterrupted one's (chunk ``c`` depends only on ``(seed, c)``). The
+partial file names what it was computed for (the resolved config without the keys that do
+not change results, the rows and a digest of every policy's parameters); a resume that
+differs is refused.
 """
 
 from __future__ import annotations
 
+import hashlib
+import json
 from collections.abc import Sequence
 from dataclasses import dataclass
+from pathlib import Path
 
 import numpy as np
+import torch
 
 from swimrl.errors import ConfigError
 from swimrl.policies.baselines import STRATEGIES, StrategySpec
 
-from .records import summary_line
-from .rollout import EvalSetup, actor_for, evaluate, evaluate_shared
+from .records import summary_line, write_json
+from .rollout import Actor, EvalSetup, actor_for, evaluate_shared
 from .statistics import paired_ratio
+
+#: The resumable state of an unfinished comparison, in its run directory.
+PARTIAL = "comparison.partial.json"
+
+#: Config keys that do not change a comparison's results (left out of a partial's identity).
+NOT_IDENTITY = (("overwrite",), ("threads",), ("eval", "progress"), ("compare", "resume"))
 
 
 @dataclass(frozen=True)
@@ -40,6 +58,7 @@ class CompareConfig:
     variants: tuple[Variant, ...]
     shared_flows: bool = False
     overwrite: bool = False
+    resume: bool = False
 
 
 def strategy_variants(
@@ -86,23 +105,80 @@ def strategy_variants(
     return tuple(out)
 
 
-def compare(cfg: CompareConfig) -> dict:
-    """Evaluate all variants (every policy loaded first) and return the comparison record."""
+def _digest(actor: Actor) -> str | None:
+    """sha256 of a policy's parameters and buffers (None for a baseline)."""
+    if not isinstance(actor, torch.nn.Module):
+        return None
+    h = hashlib.sha256()
+    for name, t in sorted(actor.state_dict().items()):
+        h.update(name.encode())
+        h.update(t.detach().cpu().contiguous().numpy().tobytes())
+    return h.hexdigest()
+
+
+def identity(cfg: CompareConfig, actors: Sequence[Actor]) -> dict:
+    """What a comparison's results depend on: the resolved config less
+    :data:`NOT_IDENTITY`, the row labels and the policies' digests (JSON-plain)."""
+    record = json.loads(json.dumps(cfg.setup.record))
+    for path in NOT_IDENTITY:
+        node = record
+        for key in path[:-1]:
+            node = node.get(key, {})
+        node.pop(path[-1], None)
+    return {"config": record, "rows": [v.label for v in cfg.variants],
+            "digests": [_digest(a) for a in actors]}
+
+
+def load_partial(path: Path, expected: dict) -> dict:
+    """The chunk results of ``path`` (:data:`PARTIAL`), refused (ConfigError) unless they were
+    computed for ``expected`` (:func:`identity`)."""
+    saved = json.loads(Path(path).read_text())
+    if saved.get("identity") != expected:
+        diff = _first_difference(saved.get("identity", {}), expected)
+        raise ConfigError(f"compare.resume=true: {path} was computed for another comparison "
+                          f"({diff}); allowed: the same config, rows and policies, or "
+                          "overwrite=true to start again")
+    return saved
+
+
+def _first_difference(a, b, key: str = "") -> str:
+    if isinstance(a, dict) and isinstance(b, dict):
+        for k in sorted(set(a) | set(b), key=str):
+            if a.get(k) != b.get(k):
+                return _first_difference(a.get(k), b.get(k), f"{key}.{k}" if key else str(k))
+    return f"{key or 'identity'}: saved {a!r}, now {b!r}"
+
+
+def compare(cfg: CompareConfig, partial: Path | None = None) -> dict:
+    """Evaluate all variants (every policy loaded first) and return the comparison record;
+    with ``partial`` (a :data:`PARTIAL` path) the chunk results are saved there as they come
+    and, with ``cfg.resume``, the ones already there are reused."""
     setup = cfg.setup
     actors = [actor_for(v.strategy, v.policy, setup.params) for v in cfg.variants]
-    results = []
-    if cfg.shared_flows:
-        for v, m in zip(cfg.variants, evaluate_shared(setup, actors), strict=True):
-            m.update(label=v.label, strategy=v.strategy.name)
-            print(f"{v.label}: R_hat = {m['R_hat_mean']:.4f} +- {m['R_hat_sem']:.4f} "
-                  "(shared flows)", flush=True)
-            results.append(m)
-    else:
-        for v, actor in zip(cfg.variants, actors, strict=True):
-            m = evaluate(setup, actor, v.strategy.name)
-            m["label"] = v.label
-            print(summary_line(m), flush=True)
-            results.append(m)
+    n = len(actors)
+    groups = [list(range(n))] if cfg.shared_flows else [[i] for i in range(n)]
+    state = {"identity": identity(cfg, actors), "done": [[] for _ in groups]}
+    if partial is not None and cfg.resume and Path(partial).exists():
+        state = load_partial(partial, state["identity"])
+        print(f"resuming {partial}: "
+              + ", ".join(f"{len(d)} chunk(s) of {'+'.join(cfg.variants[i].label for i in g)}"
+                          for d, g in zip(state["done"], groups, strict=True)), flush=True)
+    results: list[dict] = [{}] * n
+    for g, done in zip(groups, state["done"], strict=True):
+
+        def keep(chunk: dict, done: list = done) -> None:
+            done.append(chunk)
+            write_json(state, partial)
+
+        labels = [cfg.variants[i].label for i in g]
+        metrics = evaluate_shared(setup, [actors[i] for i in g], desc=" + ".join(labels),
+                                  done=list(done), on_chunk=None if partial is None else keep)
+        for i, m in zip(g, metrics, strict=True):
+            m.update(label=cfg.variants[i].label, strategy=cfg.variants[i].strategy.name)
+            results[i] = m
+            line = (f"{m['label']}: R_hat = {m['R_hat_mean']:.4f} +- {m['R_hat_sem']:.4f} "
+                    "(shared flows)") if cfg.shared_flows else summary_line(m)
+            print(line, flush=True)
     ref = np.asarray(results[0]["per_flow"])
     rows = []
     for m in results:

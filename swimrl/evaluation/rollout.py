@@ -149,20 +149,35 @@ class SplitActor(nn.Module):
 
 
 def evaluate_shared(setup: EvalSetup, actors: Sequence[Actor], desc: str = "eval",
-                    recorder: TrajectoryRecorder | None = None) -> list[dict]:
+                    recorder: TrajectoryRecorder | None = None,
+                    done: Sequence[dict] = (),
+                    on_chunk: Callable[[dict], None] | None = None) -> list[dict]:
     """Per-strategy metrics (``R_hat_mean/std/sem``, ``per_flow``, ...) of ``actors`` on the
     same flows, ``n_swimmers`` swimmers each (one actor: the plain evaluation); ``recorder``
-    records every decision of its first swimmers of each flow and strategy."""
+    records every decision of its first swimmers of each flow and strategy.
+
+    Resumable by flow chunk: chunk ``c`` depends only on ``(seed, c)``, so the chunk results
+    ``done`` (``{"per_flow": [[..] per actor], "flow_stats": .., "sim_s": ..}``, as handed to
+    ``on_chunk`` after each chunk) stand for chunks ``0 .. len(done) - 1``, which are not
+    simulated again; the result is the uninterrupted evaluation's."""
     sizes, params = setup.sizes, setup.params
     setup.runtime.apply()
     n_flows, per_batch, s, k = sizes.n_flows, sizes.flows_per_batch, sizes.n_swimmers, len(actors)
     chunks = [min(per_batch, n_flows - i) for i in range(0, n_flows, per_batch)]
-    bar = tqdm(total=len(chunks) * params.n_decisions, desc=desc, unit="step",
+    require(len(done) <= len(chunks), "done", len(done), f"at most {len(chunks)} flow chunks")
+    bar = tqdm(total=(len(chunks) - len(done)) * params.n_decisions, desc=desc, unit="step",
                disable=not sizes.progress, mininterval=2.0)
     per_flow: list[list[float]] = [[] for _ in range(k)]
-    stats, sim_s, router = [], 0.0, None
-    t_start = time.perf_counter()
+    stats, sim_s, router, n_done = [], 0.0, None, len(done)
+    for chunk in done:
+        for j in range(k):
+            per_flow[j].extend(chunk["per_flow"][j])
+        stats.append(chunk["flow_stats"])
+        sim_s += chunk["sim_s"]
+    t_start = time.perf_counter() - sim_s
     for c, n_c in enumerate(chunks):
+        if c < n_done:
+            continue
         env = SwimmerEnv.build(setup.flow, params, setup.runtime, n_c, k * s,
                                chunk_seed(setup.seed, c))
         if router is None:
@@ -177,10 +192,14 @@ def evaluate_shared(setup: EvalSetup, actors: Sequence[Actor], desc: str = "eval
         r_hat = run_episodes(env, router, bar, on_decision=recorder).double()
         if recorder is not None:
             recorder.finish(r_hat)
-        sim_s += time.perf_counter() - t0
+        chunk_s = time.perf_counter() - t0
+        sim_s += chunk_s
         stats.append(env.flow.measured_stats())
+        result = [r_hat[:, j * s:(j + 1) * s].mean(dim=1).cpu().tolist() for j in range(k)]
         for j in range(k):
-            per_flow[j].extend(r_hat[:, j * s:(j + 1) * s].mean(dim=1).cpu().tolist())
+            per_flow[j].extend(result[j])
+        if on_chunk is not None:
+            on_chunk({"chunk": c, "per_flow": result, "flow_stats": stats[-1], "sim_s": chunk_s})
     bar.close()
     wall = time.perf_counter() - t_start
     substeps = n_flows * k * s * params.n_decisions * params.n_substeps

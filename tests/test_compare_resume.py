@@ -1,0 +1,103 @@
+"""An interrupted comparison continues from ``comparison.partial.json`` (``compare.resume``)
+and gives the uninterrupted comparison's record, simulating only the chunks not yet done."""
+
+from __future__ import annotations
+
+import json
+
+import pytest
+
+from swimrl.config import compare_config
+from swimrl.env import SwimmerEnv
+from swimrl.errors import ConfigError
+from swimrl.evaluation.compare import PARTIAL, compare
+
+from .conftest import SMALL
+from .test_bad_input import COMPARE, _run_cases
+
+SIZE = ["eval.n_flows=3", "eval.flows_per_batch=1", "eval.n_swimmers=4"]
+
+
+def _config(compose_cfg, *over):
+    return compare_config(compose_cfg(SMALL + SIZE + ["compare.strategies=[sto,naive]", *over],
+                                      name="compare"))
+
+
+def _count_builds(monkeypatch) -> list:
+    calls = []
+    build = SwimmerEnv.build
+
+    def counted(*args, **kwargs):
+        calls.append(args[-1])  # the chunk seed
+        return build(*args, **kwargs)
+
+    monkeypatch.setattr(SwimmerEnv, "build", staticmethod(counted))
+    return calls
+
+
+@pytest.mark.parametrize("shared", [False, True])
+def test_resumed_comparison_is_the_uninterrupted_one(compose_cfg, tmp_path, monkeypatch, shared):
+    over = [f"compare.shared_flows={str(shared).lower()}"]
+    partial = tmp_path / PARTIAL
+    full = compare(_config(compose_cfg, *over), partial)
+    # interrupted after the first chunk of each group (3 chunks of 1 flow per group)
+    state = json.loads(partial.read_text())
+    assert [len(d) for d in state["done"]] == ([3] if shared else [3, 3])
+    state["done"] = [d[:1] for d in state["done"]]
+    partial.write_text(json.dumps(state))
+    calls = _count_builds(monkeypatch)
+    resumed = compare(_config(compose_cfg, *over, "compare.resume=true"), partial)
+    assert len(calls) == (2 if shared else 4)  # only the two chunks left, per group
+    for a, b in zip(full["rows"], resumed["rows"], strict=True):
+        assert a["label"] == b["label"] and a["per_flow"] == b["per_flow"]
+        assert (a["R_hat_mean"], a["ratio_to_first"]) == (b["R_hat_mean"], b["ratio_to_first"])
+
+
+def test_resume_of_another_comparison_is_refused(compose_cfg, tmp_path):
+    partial = tmp_path / PARTIAL
+    compare(_config(compose_cfg), partial)
+    with pytest.raises(ConfigError, match=r"seed: saved 0, now 5"):
+        compare(_config(compose_cfg, "seed=5", "compare.resume=true"), partial)
+    with pytest.raises(ConfigError, match=r"compare.strategies"):
+        compare(_config(compose_cfg, "compare.strategies=[sto]", "compare.resume=true"), partial)
+    # a different thread count or progress bar is the same comparison
+    again = compare(_config(compose_cfg, "threads=2", "eval.progress=true",
+                            "compare.resume=true"), partial)
+    assert len(again["rows"][0]["per_flow"]) == 3
+
+
+def test_cli_refuses_to_drop_an_unfinished_comparison(tmp_path):
+    """Without compare.resume (or overwrite) a run directory holding a partial comparison is
+    refused in one line and left as it was; with it the comparison completes and the partial
+    file is gone."""
+    run = tmp_path / "run"
+    run.mkdir()
+    (run / PARTIAL).write_text('{"identity": {}, "done": [[]]}')
+    args = [*SMALL, *SIZE, "compare.strategies=[sto]", f"hydra.run.dir={run}"]
+    bad, bad_value = _run_cases([[COMPARE, args], [COMPARE, [*args, "compare.resume=maybe"]]],
+                                tmp_path)
+    assert bad["rc"] == 2 and "compare.resume=true" in bad["stderr"].strip().splitlines()[-1]
+    assert bad_value["rc"] == 2 and "compare.resume" in bad_value["stderr"].splitlines()[-1]
+    assert sorted(p.name for p in run.iterdir()) == [PARTIAL]
+    (run / PARTIAL).unlink()
+    (ok,) = _run_cases([[COMPARE, [*args, "compare.resume=true"]]], tmp_path)
+    assert ok["rc"] == 0, ok["stderr"][-2000:]
+    names = sorted(p.name for p in run.iterdir())
+    assert "comparison.json" in names and PARTIAL not in names
+
+
+def test_resume_with_a_replaced_policy_file_is_refused(compose_cfg, tmp_path):
+    """Same path, other parameters: the policies' digests tell the comparisons apart."""
+    from pathlib import Path
+
+    from swimrl.policies import pretrained
+
+    root = Path(pretrained.__path__[0])
+    policy = tmp_path / "policy.pt"
+    policy.write_bytes((root / "ku10" / "policy.pt").read_bytes())
+    over = ["compare.strategies=[sto,policy]", f"compare.policies=[{policy}]"]
+    partial = tmp_path / PARTIAL
+    compare(_config(compose_cfg, *over), partial)
+    policy.write_bytes((root / "ku1" / "policy.pt").read_bytes())
+    with pytest.raises(ConfigError, match=r"digests"):
+        compare(_config(compose_cfg, *over, "compare.resume=true"), partial)
