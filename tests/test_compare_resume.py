@@ -4,13 +4,15 @@ and gives the uninterrupted comparison's record, simulating only the chunks not 
 from __future__ import annotations
 
 import json
+from pathlib import Path
 
 import pytest
 
 from swimrl.config import compare_config
 from swimrl.env import SwimmerEnv
-from swimrl.errors import ConfigError
+from swimrl.errors import BadFileError, ConfigError
 from swimrl.evaluation.compare import PARTIAL, compare
+from swimrl.policies import pretrained
 
 from .conftest import SMALL
 from .test_bad_input import COMPARE, _run_cases
@@ -51,6 +53,7 @@ def test_resumed_comparison_is_the_uninterrupted_one(compose_cfg, tmp_path, monk
     for a, b in zip(full["rows"], resumed["rows"], strict=True):
         assert a["label"] == b["label"] and a["per_flow"] == b["per_flow"]
         assert (a["R_hat_mean"], a["ratio_to_first"]) == (b["R_hat_mean"], b["ratio_to_first"])
+    assert full["flow_stats"] == resumed["flow_stats"]
 
 
 def test_resume_of_another_comparison_is_refused(compose_cfg, tmp_path):
@@ -66,32 +69,59 @@ def test_resume_of_another_comparison_is_refused(compose_cfg, tmp_path):
     assert len(again["rows"][0]["per_flow"]) == 3
 
 
-def test_cli_refuses_to_drop_an_unfinished_comparison(tmp_path):
-    """Without compare.resume (or overwrite) a run directory holding a partial comparison is
-    refused in one line and left as it was; with it the comparison completes and the partial
-    file is gone."""
-    run = tmp_path / "run"
-    run.mkdir()
-    (run / PARTIAL).write_text('{"identity": {}, "done": [[]]}')
-    args = [*SMALL, *SIZE, "compare.strategies=[sto]", f"hydra.run.dir={run}"]
-    bad, bad_value = _run_cases([[COMPARE, args], [COMPARE, [*args, "compare.resume=maybe"]]],
-                                tmp_path)
+def test_malformed_partial_is_refused(compose_cfg, tmp_path):
+    partial = tmp_path / PARTIAL
+    compare(_config(compose_cfg), partial)
+    state = json.loads(partial.read_text())
+    state["done"][0][1]["per_flow"][0] = []
+    partial.write_text(json.dumps(state))
+    with pytest.raises(BadFileError, match=r"chunk 1 is not 1 flows for each of 1 strategies"):
+        compare(_config(compose_cfg, "compare.resume=true"), partial)
+    partial.write_text("{not json")
+    with pytest.raises(BadFileError, match=r"not readable JSON"):
+        compare(_config(compose_cfg, "compare.resume=true"), partial)
+
+
+def test_cli_resume(compose_cfg, tmp_path):
+    """The command: a run directory holding a partial comparison is refused in one line without
+    compare.resume (or overwrite) and left as it was; with it the comparison completes as the
+    uninterrupted one, the partial file is gone, and relaunching a finished comparison with
+    compare.resume=true changes nothing."""
+    over = [*SMALL, *SIZE, "compare.strategies=[sto,naive]"]
+    whole, part = tmp_path / "whole", tmp_path / "part"
+    part.mkdir()
+    compare(compare_config(compose_cfg(over, name="compare")), part / PARTIAL)
+    (part / "comparison.json").unlink(missing_ok=True)
+    state = json.loads((part / PARTIAL).read_text())
+    state["done"] = [d[:1] for d in state["done"]]
+    (part / PARTIAL).write_text(json.dumps(state))
+    kept = (part / PARTIAL).read_text()
+    bad, bad_value = _run_cases([
+        [COMPARE, [*over, f"hydra.run.dir={part}"]],
+        [COMPARE, [*over, "compare.resume=maybe", f"hydra.run.dir={part}"]],
+    ], tmp_path)
     assert bad["rc"] == 2 and "compare.resume=true" in bad["stderr"].strip().splitlines()[-1]
     assert bad_value["rc"] == 2 and "compare.resume" in bad_value["stderr"].splitlines()[-1]
-    assert sorted(p.name for p in run.iterdir()) == [PARTIAL]
-    (run / PARTIAL).unlink()
-    (ok,) = _run_cases([[COMPARE, [*args, "compare.resume=true"]]], tmp_path)
-    assert ok["rc"] == 0, ok["stderr"][-2000:]
-    names = sorted(p.name for p in run.iterdir())
-    assert "comparison.json" in names and PARTIAL not in names
+    assert sorted(p.name for p in part.iterdir()) == [PARTIAL]
+    assert (part / PARTIAL).read_text() == kept
+    ok, finished = _run_cases([
+        [COMPARE, [*over, "compare.resume=true", f"hydra.run.dir={part}"]],
+        [COMPARE, [*over, f"hydra.run.dir={whole}"]],
+    ], tmp_path)
+    assert ok["rc"] == 0 and finished["rc"] == 0, ok["stderr"][-2000:] + finished["stderr"][-2000:]
+    assert not (part / PARTIAL).exists()
+    resumed = json.loads((part / "comparison.json").read_text())
+    uninterrupted = json.loads((whole / "comparison.json").read_text())
+    for a, b in zip(resumed["rows"], uninterrupted["rows"], strict=True):
+        assert a["per_flow"] == b["per_flow"]
+    before = (part / "comparison.json").stat().st_mtime_ns
+    (again,) = _run_cases([[COMPARE, [*over, "compare.resume=true", f"hydra.run.dir={part}"]]],
+                          tmp_path)
+    assert again["rc"] == 0 and (part / "comparison.json").stat().st_mtime_ns == before
 
 
 def test_resume_with_a_replaced_policy_file_is_refused(compose_cfg, tmp_path):
     """Same path, other parameters: the policies' digests tell the comparisons apart."""
-    from pathlib import Path
-
-    from swimrl.policies import pretrained
-
     root = Path(pretrained.__path__[0])
     policy = tmp_path / "policy.pt"
     policy.write_bytes((root / "ku10" / "policy.pt").read_bytes())

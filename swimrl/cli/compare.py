@@ -8,12 +8,16 @@ constant shape factors, ``naive_scan.png`` (``R_hat`` against ``Lambda``).
         'compare.policies=[pretrained/ku10,outputs/train/my_run]'   # + trained policies
     swimrl-naive-scan flow.kubo=10                   # constant Lambda over [-0.98, 0.98]
 
-An interrupted comparison continues with the same command plus ``compare.resume=true``
-(``comparison.partial.json`` in the run directory holds the flow chunks already done).
+An interrupted comparison continues with the same command (the same run directory:
+``hydra.run.dir=...``, or the sweep's) plus ``compare.resume=true``:
+``comparison.partial.json`` in the run directory holds the flow chunks already done, and a
+finished comparison is left as it is (so a relaunched multirun only completes what is
+missing).
 """
 
 from __future__ import annotations
 
+import json
 import logging
 from pathlib import Path
 
@@ -33,7 +37,7 @@ def check(cfg: DictConfig, out: Path | None) -> CompareConfig:
     """Parse and check the config; refuse to replace a result or to drop an unfinished one."""
     c = compare_config(cfg)
     if out is not None:
-        refuse_overwrite(out / "comparison.json", c.overwrite)
+        refuse_overwrite(out / "comparison.json", c.overwrite or c.resume)
         if (out / PARTIAL).exists() and not (c.resume or c.overwrite):
             raise ConfigError(f"compare.resume=false but {out / PARTIAL} holds an unfinished "
                               "comparison: allowed compare.resume=true (continue it) or "
@@ -44,6 +48,9 @@ def check(cfg: DictConfig, out: Path | None) -> CompareConfig:
 def _main(cfg: DictConfig) -> dict:
     out = run_dir()
     c = check(cfg, out)
+    if c.resume and not c.overwrite and (out / "comparison.json").exists():
+        log.info("compare.resume=true: %s is complete, nothing to do", out / "comparison.json")
+        return json.loads((out / "comparison.json").read_text())
     record = compare(c, out / PARTIAL)
     print(write_comparison(record, out), flush=True)
     (out / PARTIAL).unlink(missing_ok=True)

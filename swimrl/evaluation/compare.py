@@ -27,11 +27,11 @@ from pathlib import Path
 import numpy as np
 import torch
 
-from swimrl.errors import ConfigError
+from swimrl.errors import BadFileError, ConfigError
 from swimrl.policies.baselines import STRATEGIES, StrategySpec
 
 from .records import summary_line, write_json
-from .rollout import Actor, EvalSetup, actor_for, evaluate_shared
+from .rollout import Actor, EvalSetup, actor_for, check_chunks, evaluate_shared, flow_chunks
 from .statistics import paired_ratio
 
 #: The resumable state of an unfinished comparison, in its run directory.
@@ -105,10 +105,11 @@ def strategy_variants(
     return tuple(out)
 
 
-def _digest(actor: Actor) -> str | None:
-    """sha256 of a policy's parameters and buffers (None for a baseline)."""
+def _digest(actor: Actor) -> str:
+    """sha256 of a policy's parameters and buffers; a baseline's spec (its name, shape factor
+    and coefficients) as text."""
     if not isinstance(actor, torch.nn.Module):
-        return None
+        return repr(actor)
     h = hashlib.sha256()
     for name, t in sorted(actor.state_dict().items()):
         h.update(name.encode())
@@ -132,16 +133,22 @@ def identity(cfg: CompareConfig, actors: Sequence[Actor]) -> dict:
 def load_partial(path: Path, expected: dict) -> dict:
     """The chunk results of ``path`` (:data:`PARTIAL`), refused (ConfigError) unless they were
     computed for ``expected`` (:func:`identity`)."""
-    saved = json.loads(Path(path).read_text())
-    if saved.get("identity") != expected:
-        diff = _first_difference(saved.get("identity", {}), expected)
+    try:
+        saved = json.loads(Path(path).read_text())
+    except (OSError, UnicodeDecodeError, json.JSONDecodeError) as exc:
+        raise BadFileError(f"{path}: not readable JSON ({exc}); allowed: a partial comparison "
+                           "written by swimrl-compare, or overwrite=true to start again") from exc
+    if not isinstance(saved, dict) or saved.get("identity") != expected:
+        diff = _first_difference(saved.get("identity", {}) if isinstance(saved, dict)
+                                 else saved, expected)
         raise ConfigError(f"compare.resume=true: {path} was computed for another comparison "
                           f"({diff}); allowed: the same config, rows and policies, or "
                           "overwrite=true to start again")
     return saved
 
 
-def _first_difference(a, b, key: str = "") -> str:
+def _first_difference(a: object, b: object, key: str = "") -> str:
+    """``key: saved A, now B`` for the first nested entry where ``a`` and ``b`` differ."""
     if isinstance(a, dict) and isinstance(b, dict):
         for k in sorted(set(a) | set(b), key=str):
             if a.get(k) != b.get(k):
@@ -160,10 +167,20 @@ def compare(cfg: CompareConfig, partial: Path | None = None) -> dict:
     state = {"identity": identity(cfg, actors), "done": [[] for _ in groups]}
     if partial is not None and cfg.resume and Path(partial).exists():
         state = load_partial(partial, state["identity"])
+        try:
+            if not (isinstance(state.get("done"), list) and len(state["done"]) == len(groups)):
+                raise ValueError(f"not one chunk list per group of strategies ({len(groups)})")
+            for g, done in zip(groups, state["done"], strict=True):
+                check_chunks(done, flow_chunks(setup.sizes), len(g))
+        except ValueError as exc:
+            raise BadFileError(f"{partial}: {exc}; allowed: a partial comparison written by "
+                               "swimrl-compare, or overwrite=true to start again") from exc
         print(f"resuming {partial}: "
               + ", ".join(f"{len(d)} chunk(s) of {'+'.join(cfg.variants[i].label for i in g)}"
                           for d, g in zip(state["done"], groups, strict=True)), flush=True)
-    results: list[dict] = [{}] * n
+    elif partial is not None and cfg.resume:
+        print(f"compare.resume=true: no {partial}, starting from the first chunk", flush=True)
+    results: list[dict] = [{} for _ in range(n)]
     for g, done in zip(groups, state["done"], strict=True):
 
         def keep(chunk: dict, done: list = done) -> None:

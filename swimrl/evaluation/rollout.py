@@ -148,6 +148,27 @@ class SplitActor(nn.Module):
         return td
 
 
+def flow_chunks(sizes: EvalSizes) -> list[int]:
+    """Flows per chunk: ``n_flows`` in chunks of ``flows_per_batch`` (the last one smaller)."""
+    n, per = sizes.n_flows, sizes.flows_per_batch
+    return [min(per, n - i) for i in range(0, n, per)]
+
+
+def check_chunks(done: Sequence[dict], chunks: Sequence[int], k: int) -> None:
+    """ValueError unless ``done`` are the results of chunks ``0, 1, ..`` of ``chunks`` (flows
+    per chunk) for ``k`` strategies, each with its times and flow statistics."""
+    if len(done) > len(chunks):
+        raise ValueError(f"{len(done)} chunks done of {len(chunks)}")
+    for c, chunk in enumerate(done):
+        ok = (isinstance(chunk, dict) and chunk.get("chunk") == c
+              and {"flow_stats", "sim_s", "wall_s"} <= set(chunk)
+              and len(chunk.get("per_flow", ())) == k
+              and all(len(f) == chunks[c] for f in chunk["per_flow"]))
+        if not ok:
+            raise ValueError(f"chunk {c} is not {chunks[c]} flows for each of {k} strategies "
+                             "with flow_stats, sim_s and wall_s")
+
+
 def evaluate_shared(setup: EvalSetup, actors: Sequence[Actor], desc: str = "eval",
                     recorder: TrajectoryRecorder | None = None,
                     done: Sequence[dict] = (),
@@ -157,14 +178,15 @@ def evaluate_shared(setup: EvalSetup, actors: Sequence[Actor], desc: str = "eval
     records every decision of its first swimmers of each flow and strategy.
 
     Resumable by flow chunk: chunk ``c`` depends only on ``(seed, c)``, so the chunk results
-    ``done`` (``{"per_flow": [[..] per actor], "flow_stats": .., "sim_s": ..}``, as handed to
-    ``on_chunk`` after each chunk) stand for chunks ``0 .. len(done) - 1``, which are not
-    simulated again; the result is the uninterrupted evaluation's."""
+    ``done`` (``{"chunk": c, "per_flow": [[..] per actor], "flow_stats": .., "sim_s": ..,
+    "wall_s": ..}``, as handed to ``on_chunk`` after each chunk) stand for chunks
+    ``0 .. len(done) - 1``, which are not simulated again; the per-flow results are the
+    uninterrupted evaluation's, and the times add up over the legs."""
     sizes, params = setup.sizes, setup.params
     setup.runtime.apply()
-    n_flows, per_batch, s, k = sizes.n_flows, sizes.flows_per_batch, sizes.n_swimmers, len(actors)
-    chunks = [min(per_batch, n_flows - i) for i in range(0, n_flows, per_batch)]
-    require(len(done) <= len(chunks), "done", len(done), f"at most {len(chunks)} flow chunks")
+    n_flows, s, k = sizes.n_flows, sizes.n_swimmers, len(actors)
+    chunks = flow_chunks(sizes)
+    check_chunks(done, chunks, k)
     bar = tqdm(total=(len(chunks) - len(done)) * params.n_decisions, desc=desc, unit="step",
                disable=not sizes.progress, mininterval=2.0)
     per_flow: list[list[float]] = [[] for _ in range(k)]
@@ -174,10 +196,11 @@ def evaluate_shared(setup: EvalSetup, actors: Sequence[Actor], desc: str = "eval
             per_flow[j].extend(chunk["per_flow"][j])
         stats.append(chunk["flow_stats"])
         sim_s += chunk["sim_s"]
-    t_start = time.perf_counter() - sim_s
+    t_start = time.perf_counter() - sum(chunk["wall_s"] for chunk in done)
     for c, n_c in enumerate(chunks):
         if c < n_done:
             continue
+        t_chunk = time.perf_counter()
         env = SwimmerEnv.build(setup.flow, params, setup.runtime, n_c, k * s,
                                chunk_seed(setup.seed, c))
         if router is None:
@@ -199,7 +222,8 @@ def evaluate_shared(setup: EvalSetup, actors: Sequence[Actor], desc: str = "eval
         for j in range(k):
             per_flow[j].extend(result[j])
         if on_chunk is not None:
-            on_chunk({"chunk": c, "per_flow": result, "flow_stats": stats[-1], "sim_s": chunk_s})
+            on_chunk({"chunk": c, "per_flow": result, "flow_stats": stats[-1], "sim_s": chunk_s,
+                      "wall_s": time.perf_counter() - t_chunk})
     bar.close()
     wall = time.perf_counter() - t_start
     substeps = n_flows * k * s * params.n_decisions * params.n_substeps
