@@ -189,17 +189,9 @@ def evaluate_shared(setup: EvalSetup, actors: Sequence[Actor], desc: str = "eval
     check_chunks(done, chunks, k)
     bar = tqdm(total=(len(chunks) - len(done)) * params.n_decisions, desc=desc, unit="step",
                disable=not sizes.progress, mininterval=2.0)
-    per_flow: list[list[float]] = [[] for _ in range(k)]
-    stats, sim_s, router, n_done = [], 0.0, None, len(done)
-    for chunk in done:
-        for j in range(k):
-            per_flow[j].extend(chunk["per_flow"][j])
-        stats.append(chunk["flow_stats"])
-        sim_s += chunk["sim_s"]
+    results, router = list(done), None
     t_start = time.perf_counter() - sum(chunk["wall_s"] for chunk in done)
-    for c, n_c in enumerate(chunks):
-        if c < n_done:
-            continue
+    for c, n_c in enumerate(chunks[len(done):], start=len(done)):
         t_chunk = time.perf_counter()
         env = SwimmerEnv.build(setup.flow, params, setup.runtime, n_c, k * s,
                                chunk_seed(setup.seed, c))
@@ -216,15 +208,15 @@ def evaluate_shared(setup: EvalSetup, actors: Sequence[Actor], desc: str = "eval
         if recorder is not None:
             recorder.finish(r_hat)
         chunk_s = time.perf_counter() - t0
-        sim_s += chunk_s
-        stats.append(env.flow.measured_stats())
         result = [r_hat[:, j * s:(j + 1) * s].mean(dim=1).cpu().tolist() for j in range(k)]
-        for j in range(k):
-            per_flow[j].extend(result[j])
+        results.append({"chunk": c, "per_flow": result, "flow_stats": env.flow.measured_stats(),
+                        "sim_s": chunk_s, "wall_s": time.perf_counter() - t_chunk})
         if on_chunk is not None:
-            on_chunk({"chunk": c, "per_flow": result, "flow_stats": stats[-1], "sim_s": chunk_s,
-                      "wall_s": time.perf_counter() - t_chunk})
+            on_chunk(results[-1])
     bar.close()
+    per_flow = [[x for chunk in results for x in chunk["per_flow"][j]] for j in range(k)]
+    stats = [chunk["flow_stats"] for chunk in results]
+    sim_s = sum(chunk["sim_s"] for chunk in results)
     wall = time.perf_counter() - t_start
     substeps = n_flows * k * s * params.n_decisions * params.n_substeps
     how = "averaged over flow chunks" + (f", shared by {k} strategies" if k > 1 else "")
