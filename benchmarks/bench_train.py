@@ -61,6 +61,7 @@ class Variant:
         cfg.runtime.apply()
         device, dtype = cfg.runtime.device, cfg.runtime.dtype
         self.name, self.plan = name, plan
+        self.sync = torch.device(device).type == "cuda"  # time kernels, not their launches
         self.trainer = PPOTrainer(cfg, plan, run_dir / name, device, dtype)
         if name == "before":
             self.trainer.loss.entropy_bonus = True
@@ -75,13 +76,19 @@ class Variant:
     def step(self, record: bool) -> None:
         t0 = time.perf_counter()
         data = next(self.batches)
+        self._sync()
         t1 = time.perf_counter()
         self.trainer.update(data)
         self.collector.update_policy_weights_()
+        self._sync()
         t2 = time.perf_counter()
         if record:
             self.collect_s.append(t1 - t0)
             self.update_s.append(t2 - t1)
+
+    def _sync(self) -> None:
+        if self.sync:
+            torch.cuda.synchronize()
 
     def redraw(self, repeats: int) -> float:
         """Median seconds of one redraw of every training flow (an episode's end)."""
@@ -89,6 +96,7 @@ class Variant:
         for _ in range(repeats):
             t0 = time.perf_counter()
             self.trainer.env.flow.reset()
+            self._sync()
             times.append(time.perf_counter() - t0)
         return statistics.median(times)
 

@@ -5,13 +5,21 @@ The build is cached by torch under ``TORCH_EXTENSIONS_DIR`` (default
 the hash of the kernel source, the compile flags and the torch version
 (``swimrl_heun_cpu_<hash8>``), so two installs (or two versions of the source) on one machine
 each keep their own build instead of rebuilding each other's.
+
+Once built, the module is imported straight from its ``.so`` (the name already pins the
+source, flags and torch version), without torch's build step and its lock file: a process
+killed while torch held that lock would otherwise leave every later run waiting on it
+forever. A lock older than :data:`STALE_LOCK_S` in a directory with no finished build is
+such a leftover; it is removed with a warning before the build.
 """
 
 from __future__ import annotations
 
 import functools
 import hashlib
+import importlib.util
 import logging
+import time
 from pathlib import Path
 
 import torch
@@ -20,6 +28,8 @@ log = logging.getLogger(__name__)
 
 SOURCE = Path(__file__).with_name("heun_cpu.cpp")
 CFLAGS = ("-O3", "-fno-math-errno")
+#: A build lock older than this (seconds) is a leftover of a killed process (a build: ~30 s).
+STALE_LOCK_S = 600.0
 
 
 def extension_name(source: Path = SOURCE) -> str:
@@ -36,9 +46,35 @@ def build_cpu_kernel(source: Path = SOURCE):
 
     name = extension_name(source)
     built = Path(_get_build_directory(name, verbose=False))
-    if not any(built.glob(f"{name}*.so")):
-        log.info("building the fused kernel (once, ~30 s) in %s", built)
+    library = built / f"{name}.so"
+    if library.is_file():
+        return import_built(name, library)
+    remove_stale_lock(built / "lock")
+    log.info("building the fused kernel (once, ~30 s) in %s", built)
     return load(name=name, sources=[str(source)], extra_cflags=list(CFLAGS), verbose=False)
+
+
+def import_built(name: str, library: Path):
+    """The extension module ``name`` imported from its built ``library`` (no build step)."""
+    spec = importlib.util.spec_from_file_location(name, library)
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module
+
+
+def remove_stale_lock(lock: Path, max_age_s: float = STALE_LOCK_S) -> bool:
+    """Delete ``lock`` if it is older than ``max_age_s`` seconds (a killed build's leftover,
+    on which torch's build would wait forever); True if it was removed."""
+    try:
+        age = time.time() - lock.stat().st_mtime
+    except FileNotFoundError:
+        return False
+    if age < max_age_s:
+        return False
+    log.warning("removing the stale build lock %s (%.0f s old, left by a killed process)",
+                lock, age)
+    lock.unlink(missing_ok=True)
+    return True
 
 
 @functools.cache
@@ -52,4 +88,11 @@ def load_cpu_kernel():
         return None
 
 
-__all__ = ["build_cpu_kernel", "extension_name", "load_cpu_kernel"]
+__all__ = [
+    "STALE_LOCK_S",
+    "build_cpu_kernel",
+    "extension_name",
+    "import_built",
+    "load_cpu_kernel",
+    "remove_stale_lock",
+]
