@@ -17,6 +17,10 @@ are truncated after ``N = T / T_u`` decisions. Keys:
 
 Partial resets (``_reset`` mask ``(F, S, 1)``) start new swimmers at uniformly random
 positions and orientations; a flow whose swimmers all reset also gets a new realisation.
+With ``ic_blocks = B > 1`` the ``S`` swimmers of a flow are ``B`` blocks of ``S / B`` that
+start from the same positions and orientations (common random numbers: one block per
+strategy in a paired comparison); the draws are those of an environment of ``S / B``
+swimmers.
 Positions are kept as a wrapped coordinate in ``[0, L)`` plus integer image counts, so the
 unbounded displacement ``x - x_0 = (p - p_0) + L (m - m_0)`` keeps float32 resolution of the
 grid cell however far the swimmer goes.
@@ -109,11 +113,16 @@ class SwimmerEnv(EnvBase):
         params: EnvParams,
         generator: torch.Generator | None = None,
         kernel: str = "auto",
+        ic_blocks: int = 1,
     ):
         if n_swimmers < 1:
             raise ValueError(f"n_swimmers={n_swimmers} must be >= 1")
+        if ic_blocks < 1 or n_swimmers % ic_blocks:
+            raise ValueError(f"ic_blocks={ic_blocks} must be >= 1 and divide "
+                             f"n_swimmers={n_swimmers}")
         batch = torch.Size([flow.n_flows, n_swimmers])
         super().__init__(device=flow.device, batch_size=batch)
+        self.ic_blocks = ic_blocks
         self.flow = flow
         self.params = params
         self.generator = generator if generator is not None else flow.generator
@@ -164,15 +173,18 @@ class SwimmerEnv(EnvBase):
         n_flows: int,
         n_swimmers: int,
         seed: int,
+        ic_blocks: int = 1,
     ) -> SwimmerEnv:
         """Environment of ``n_flows x n_swimmers`` swimmers in new realisations of ``flow``;
-        all randomness (flows, initial conditions, noise) from ``seed``."""
+        all randomness (flows, initial conditions, noise) from ``seed``; ``ic_blocks`` blocks
+        of swimmers per flow with identical initial conditions."""
         device, dtype = runtime.device, runtime.dtype
         gen = torch.Generator(device=device).manual_seed(int(seed))
         realisations = build_flow(
             flow, n_flows, device, dtype, gen, params.update_interval, params.duration
         )
-        return cls(realisations, n_swimmers, params, generator=gen, kernel=runtime.kernel)
+        return cls(realisations, n_swimmers, params, generator=gen, kernel=runtime.kernel,
+                   ic_blocks=ic_blocks)
 
     # -- state helpers ------------------------------------------------------------------------
     @property
@@ -231,12 +243,22 @@ class SwimmerEnv(EnvBase):
         k = int(mask.sum())
         if k:
             g, dev, dt = self.generator, self.device, self.pos.dtype
-            new_pos = torch.rand(k, 2, generator=g, device=dev, dtype=dt) * self.flow.grid.length
+            blocks = self.ic_blocks
+            if blocks > 1 and not bool((mask == flows.unsqueeze(1)).all()):
+                raise ValueError("ic_blocks > 1 needs whole-flow resets")
+            n = k // blocks  # swimmers drawn; each block of a flow gets the same draws
+            new_pos = torch.rand(n, 2, generator=g, device=dev, dtype=dt) * self.flow.grid.length
+            new_theta = torch.rand(n, generator=g, device=dev, dtype=dt) * (2 * math.pi)
+            if blocks > 1:
+                per_block = self.n_swimmers // blocks
+                new_pos = new_pos.view(-1, 1, per_block, 2).expand(-1, blocks, -1, -1)
+                new_pos = new_pos.reshape(k, 2)
+                new_theta = new_theta.view(-1, 1, per_block).expand(-1, blocks, -1).reshape(k)
             self.pos[mask] = new_pos
             self.start_pos[mask] = new_pos
             self.image[mask] = 0
             self.start_image[mask] = 0
-            self.theta[mask] = torch.rand(k, generator=g, device=dev, dtype=dt) * (2 * math.pi)
+            self.theta[mask] = new_theta
             self.step_count[mask] = 0
         return self._observe()
 

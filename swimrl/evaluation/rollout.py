@@ -174,7 +174,9 @@ def evaluate_shared(setup: EvalSetup, actors: Sequence[Actor], desc: str = "eval
                     done: Sequence[dict] = (),
                     on_chunk: Callable[[dict], None] | None = None) -> list[dict]:
     """Per-strategy metrics (``R_hat_mean/std/sem``, ``per_flow``, ...) of ``actors`` on the
-    same flows, ``n_swimmers`` swimmers each (one actor: the plain evaluation); ``recorder``
+    same flows, ``n_swimmers`` swimmers each from the same initial conditions (block ``j``
+    of the environment is actor ``j``'s; each block's result is the plain evaluation of its
+    actor, as long as the dynamics has no noise); ``recorder``
     records every decision of its first swimmers of each flow and strategy.
 
     Resumable by flow chunk: chunk ``c`` depends only on ``(seed, c)``, so the chunk results
@@ -194,7 +196,7 @@ def evaluate_shared(setup: EvalSetup, actors: Sequence[Actor], desc: str = "eval
     for c, n_c in enumerate(chunks[len(done):], start=len(done)):
         t_chunk = time.perf_counter()
         env = SwimmerEnv.build(setup.flow, params, setup.runtime, n_c, k * s,
-                               chunk_seed(setup.seed, c))
+                               chunk_seed(setup.seed, c), ic_blocks=k)
         if router is None:
             spec = env.action_spec_unbatched
             modules = [build_strategy(a, spec) if isinstance(a, StrategySpec) else a
