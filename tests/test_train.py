@@ -386,7 +386,8 @@ def test_bigbatch_preset_extends_default():
 
 
 def test_long_floor_preset_is_long_with_a_sigma_bound():
-    """``train_preset=long_floor``: ``long`` (1e8 frames, linear decay) with ``sigma >= 0.3``."""
+    """``train_preset=long_floor`` (``long_floor05``): ``long`` (1e8 frames, linear decay) with
+    ``sigma >= 0.3`` (``0.5``)."""
     from hydra import compose, initialize_config_module
 
     with initialize_config_module("swimrl.conf", version_base="1.3"):
@@ -396,6 +397,11 @@ def test_long_floor_preset_is_long_with_a_sigma_bound():
     assert train_config(floor).model.min_std == 0.3
     floor.model.min_std = long.model.min_std
     assert floor == long
+    with initialize_config_module("swimrl.conf", version_base="1.3"):
+        floor05 = compose("train", overrides=["train_preset=long_floor05"])
+    assert floor05.model.min_std == 0.5 and train_config(floor05).model.min_std == 0.5
+    floor05.model.min_std = long.model.min_std
+    assert floor05 == long
 
 
 def test_training_in_a_stored_dns_run(compose_cfg, tmp_path):
