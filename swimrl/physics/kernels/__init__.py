@@ -17,7 +17,6 @@ from __future__ import annotations
 
 import functools
 import hashlib
-import importlib.util
 import logging
 import time
 from pathlib import Path
@@ -42,24 +41,20 @@ def extension_name(source: Path = SOURCE) -> str:
 
 def build_cpu_kernel(source: Path = SOURCE):
     """Build (or load the cached build of) the kernel in ``source``; the extension module."""
-    from torch.utils.cpp_extension import _get_build_directory, load
+    from torch.utils.cpp_extension import (
+        _get_build_directory,
+        _import_module_from_library,
+        load,
+    )
 
     name = extension_name(source)
     built = Path(_get_build_directory(name, verbose=False))
     library = built / f"{name}.so"
-    if library.is_file():
-        return import_built(name, library)
+    if library.is_file():  # torch's own loader for a finished build, without its build step
+        return _import_module_from_library(name, str(built), True)
     remove_stale_lock(built / "lock")
     log.info("building the fused kernel (once, ~30 s) in %s", built)
     return load(name=name, sources=[str(source)], extra_cflags=list(CFLAGS), verbose=False)
-
-
-def import_built(name: str, library: Path):
-    """The extension module ``name`` imported from its built ``library`` (no build step)."""
-    spec = importlib.util.spec_from_file_location(name, library)
-    module = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(module)
-    return module
 
 
 def remove_stale_lock(lock: Path, max_age_s: float = STALE_LOCK_S) -> bool:
@@ -92,7 +87,6 @@ __all__ = [
     "STALE_LOCK_S",
     "build_cpu_kernel",
     "extension_name",
-    "import_built",
     "load_cpu_kernel",
     "remove_stale_lock",
 ]
