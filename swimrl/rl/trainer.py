@@ -165,59 +165,76 @@ class PPOTrainer:
         self.logger.log_scalar("eval/R_hat_vs_episodes", m["R_hat_mean"], round(self.episodes))
 
     # -- one update ---------------------------------------------------------------------------
-    def _loss_backward(self, batch: TensorDict) -> TensorDict:
-        """``ClipPPOLoss`` on one minibatch and the backward pass of
-        ``loss_objective + loss_entropy + loss_critic``; returns the detached loss terms."""
+    def _loss(self, batch: TensorDict) -> tuple[torch.Tensor, TensorDict]:
+        """``ClipPPOLoss`` on one minibatch: ``loss_objective + loss_entropy + loss_critic``
+        and the detached loss terms."""
         out = self.loss(batch)
         total = out["loss_objective"] + out["loss_critic"]
         if "loss_entropy" in out.keys():  # noqa: SIM118 (TensorDict)
             total = total + out["loss_entropy"]
+        return total, out.detach()
+
+    def _loss_backward(self, batch: TensorDict) -> TensorDict:
+        """:meth:`_loss` and the backward pass of the total; returns the detached terms."""
+        total, out = self._loss(batch)
         total.backward()
-        return out.detach()
+        return out
 
     def _compiled_loss_backward(self):
-        """:meth:`_loss_backward`, compiled with ``torch.compile`` when ``train.compile`` is
-        set (as TorchRL's ``sota-implementations/ppo``: one graph for loss and backward;
-        compiled lazily, on the first minibatch), else eager."""
+        """:meth:`_loss_backward`, with :meth:`_loss` compiled by ``torch.compile`` when
+        ``train.compile`` is set (as TorchRL's ``sota-implementations/ppo``; compiled lazily,
+        on the first minibatch), else eager. The backward pass stays outside the compiled
+        function (Dynamo cannot trace ``Tensor.backward``): AOTAutograd's compiled backward
+        graph runs there, and the call is one graph, one guard check."""
         if self._loss_fn is None:
             self._loss_fn = self._loss_backward
             if self.cfg.train.compile:
-                self._loss_fn = torch.compile(self._loss_backward, dynamic=False)
+                loss = torch.compile(self._loss, dynamic=False)
+
+                def loss_backward(batch: TensorDict) -> TensorDict:
+                    total, out = loss(batch)
+                    total.backward()
+                    return out
+
+                self._loss_fn = loss_backward
         return self._loss_fn
 
     def update(self, data: TensorDict) -> dict[str, torch.Tensor]:
-        """GAE + ``epochs x minibatches`` clipped-PPO steps on one batch; mean loss terms."""
+        """GAE + ``epochs x minibatches`` clipped-PPO steps on one batch; mean loss terms.
+
+        Each epoch gathers the batch once in a fresh random order and takes its minibatches
+        as consecutive slices; the loss terms are stacked and averaged once per update."""
         plan = self.plan
         with torch.no_grad(), record_function("ppo/gae"):
             data = self.gae(data)
         flat = data.select(*self._loss_keys(data), strict=False).reshape(-1)
         n, mb = flat.numel(), plan.minibatch_size
-        sums: dict[str, torch.Tensor] = {}
+        terms: list[TensorDict] = []
         clip = self.cfg.optim.max_grad_norm
         groups = [list(self.actor.parameters()), list(self.critic.parameters())]
         step = self._compiled_loss_backward()
+        log_keys = None
         for _ in range(plan.epochs):
-            perm = torch.randperm(n, device=flat.device)
+            with record_function("ppo/minibatch"):
+                shuffled = flat[torch.randperm(n, device=flat.device)]
             for k in range(plan.minibatches_per_epoch):
-                with record_function("ppo/minibatch"):
-                    batch = flat[perm[k * mb : (k + 1) * mb]]
+                batch = shuffled[k * mb : (k + 1) * mb]
                 with record_function("ppo/loss_backward"):
                     out = step(batch)
                 with record_function("ppo/clip_optimizer"):
                     if clip is not None:
                         for g in groups:
-                            torch.nn.utils.clip_grad_norm_(g, float(clip))
+                            torch.nn.utils.clip_grad_norm_(g, float(clip), foreach=True)
                     for opt in self.optimizers:
                         opt.step()
                         opt.zero_grad(set_to_none=True)
-                for key in LOSS_LOG_KEYS:
-                    if key in out.keys():  # noqa: SIM118 (TensorDict)
-                        v = out[key].float().mean()
-                        sums[key] = sums[key] + v if key in sums else v
+                if log_keys is None:
+                    log_keys = [key for key in LOSS_LOG_KEYS if key in out.keys()]  # noqa: SIM118
+                terms.append(out.select(*log_keys))
         for sch in self.schedulers:
             sch.step()
-        steps = plan.gradient_steps_per_update
-        return {k: v / steps for k, v in sums.items()}
+        stacked = torch.stack(terms)  # (gradient steps,) + the loss terms' shapes
+        return {k: stacked[k].float().reshape(len(terms), -1).mean() for k in log_keys}
 
     def _loss_keys(self, data: TensorDict) -> list:
         keys = set(self.loss.in_keys) | {"advantage", "value_target", "state_value"}
