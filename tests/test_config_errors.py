@@ -127,3 +127,23 @@ def test_ku_resolver_names_records_per_kubo(compose_cfg, kubo, label):
     cfg = compose_cfg([f"flow.kubo={kubo}",
                        "compare.policies=['pretrained/ku${ku:${flow.kubo}}']"], name="compare")
     assert cfg.compare.policies == [f"pretrained/ku{label}"]
+
+
+def test_gain_scan_writes_its_record_and_never_overwrites(tmp_path):
+    """``swimrl-gain-scan`` writes ``gain_scan.json`` / ``.md`` (the printed table) and
+    refuses, before any compute, to replace them without ``overwrite=true``."""
+    run = tmp_path / "scan"
+    cmd = [sys.executable, "-m", "swimrl.cli.gain_scan", *SMALL, "flow.kubo=10",
+           "policy=pretrained/ku10", "gains=[1,3]", "eval.n_flows=2", "eval.n_swimmers=8",
+           f"hydra.run.dir={run}"]
+    out = subprocess.run(cmd, capture_output=True, text=True, check=True)
+    record = json.loads((run / "gain_scan.json").read_text())
+    assert record["gains"] == [1.0, 3.0] and record["policy"].endswith("ku10")
+    assert [r["gain"] for r in record["rows"]] == [1.0, 3.0]
+    assert all(len(r["per_flow"]) == 2 for r in record["rows"])
+    table = (run / "gain_scan.md").read_text()
+    assert table.strip() in out.stdout and f"{record['rows'][1]['R_hat_mean']:.4f}" in table
+    before = (run / "gain_scan.json").read_text()
+    again = subprocess.run(cmd, capture_output=True, text=True)
+    assert again.returncode == 2 and "overwrite=true" in again.stderr
+    assert (run / "gain_scan.json").read_text() == before

@@ -37,7 +37,7 @@ from swimrl.errors import BadFileError, ConfigError, NonFiniteError
 CONFIG_PATH = "pkg://swimrl.conf"
 USAGE_ERRORS = (ConfigError, BadFileError, FileExistsError, FileNotFoundError)
 #: Result files whose presence marks a run directory as finished.
-RESULT_FILES = ("metrics.json", "comparison.json", "fit.json")
+RESULT_FILES = ("metrics.json", "comparison.json", "fit.json", "gain_scan.json")
 #: ``check(cfg, out)`` of each Hydra config name; ``out`` is the run directory, or None in a
 #: multirun (the job directories are not known yet).
 CHECKS: dict[str, Callable[[DictConfig, Path | None], object]] = {}
