@@ -18,8 +18,9 @@ graph on the first one) of
 
 Variants (``--variants``, comma-separated):
 
-* ``before``: the code as it was before the compiled path: eager, ``ClipPPOLoss``
-  computing the Monte-Carlo entropy of the ``TanhNormal`` although its coefficient is 0
+* ``before``: the code as it was before the compiled path, emulated within the current
+  code (whose update bookkeeping it shares): eager, ``ClipPPOLoss`` computing the
+  Monte-Carlo entropy of the ``TanhNormal`` although its coefficient is 0
   (``entropy_bonus=True``), and the flow redraw through full-grid FFTs;
 * ``eager``: no entropy sample when the coefficient is 0, eager;
 * ``compiled``: the same with ``train.compile=true`` (what the presets use).

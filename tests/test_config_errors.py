@@ -141,9 +141,21 @@ def test_gain_scan_writes_its_record_and_never_overwrites(tmp_path):
     assert record["gains"] == [1.0, 3.0] and record["policy"].endswith("ku10")
     assert [r["gain"] for r in record["rows"]] == [1.0, 3.0]
     assert all(len(r["per_flow"]) == 2 for r in record["rows"])
+    assert record["config"]["flow"]["kubo"] == 10
     table = (run / "gain_scan.md").read_text()
     assert table.strip() in out.stdout and f"{record['rows'][1]['R_hat_mean']:.4f}" in table
-    before = (run / "gain_scan.json").read_text()
+    kept = {name: (run / name).read_text()
+            for name in ("gain_scan.json", "gain_scan.md", ".hydra/config.yaml")}
     again = subprocess.run(cmd, capture_output=True, text=True)
     assert again.returncode == 2 and "overwrite=true" in again.stderr
-    assert (run / "gain_scan.json").read_text() == before
+    assert again.stdout == ""  # refused before the scan ran (it prints the table)
+    assert {name: (run / name).read_text() for name in kept} == kept
+    # a directory holding only a (hand-written) table is refused too, the table kept
+    table_only = tmp_path / "table_only"
+    table_only.mkdir()
+    (table_only / "gain_scan.md").write_text("notes\n")
+    cmd_t = [*cmd[:-1], f"hydra.run.dir={table_only}"]
+    refused = subprocess.run(cmd_t, capture_output=True, text=True)
+    assert refused.returncode == 2 and "gain_scan.md exists" in refused.stderr
+    assert (table_only / "gain_scan.md").read_text() == "notes\n"
+    assert not (table_only / "gain_scan.json").exists()

@@ -522,3 +522,49 @@ def test_resumed_run_continues_compiled(train_cfg, tmp_path, monkeypatch):
     monkeypatch.setattr(PPOTrainer, "_compiled_loss_backward", spy)
     m = train(train_cfg("resume=true", *opts), tmp_path)
     assert m["training"]["updates"] == 4 and used == [True, True]
+
+
+def test_update_takes_the_minibatches_of_a_fresh_permutation_per_epoch(train_cfg, tmp_path):
+    """``PPOTrainer.update`` equals the textbook loop (per epoch a fresh ``randperm``,
+    minibatch k = the samples ``perm[k mb : (k + 1) mb]``, one loss + backward, clipping and
+    an Adam step each): the same parameters after two updates, bit for bit."""
+    from swimrl.rl.builders import make_collector
+
+    c = train_config(train_cfg("train.compile=false"))
+    fast = PPOTrainer(c, make_plan(c), tmp_path / "a", torch.device("cpu"), torch.float32)
+    ref = PPOTrainer(c, make_plan(c), tmp_path / "b", torch.device("cpu"), torch.float32)
+    collector = make_collector(fast.env, fast.actor, fast.plan, 2 * fast.plan.frames_per_batch,
+                               "cpu")
+    batches = [b.clone() for b in collector]
+    collector.shutdown()
+
+    def reference_update(t: PPOTrainer, data) -> None:
+        with torch.no_grad():
+            data = t.gae(data)
+        flat = data.select(*t._loss_keys(data), strict=False).reshape(-1)
+        mb = t.plan.minibatch_size
+        for _ in range(t.plan.epochs):
+            perm = torch.randperm(flat.numel())
+            for k in range(t.plan.minibatches_per_epoch):
+                t._loss_backward(flat[perm[k * mb : (k + 1) * mb]])
+                for net in (t.actor, t.critic):
+                    torch.nn.utils.clip_grad_norm_(list(net.parameters()),
+                                                   float(c.optim.max_grad_norm))
+                for opt in t.optimizers:
+                    opt.step()
+                    opt.zero_grad(set_to_none=True)
+        for sch in t.schedulers:
+            sch.step()
+
+    for i, data in enumerate(batches):
+        torch.manual_seed(100 + i)
+        stats = fast.update(data.clone())
+        torch.manual_seed(100 + i)
+        reference_update(ref, data.clone())
+        assert all(torch.isfinite(v) for v in stats.values())
+    for net_a, net_b in ((fast.actor, ref.actor), (fast.critic, ref.critic)):
+        for p_a, p_b in zip(net_a.parameters(), net_b.parameters(), strict=True):
+            assert torch.equal(p_a, p_b)
+    assert any(not torch.equal(p, q) for p, q in
+               zip(fast.actor.parameters(), PPOTrainer(c, make_plan(c), tmp_path / "c",
+                   torch.device("cpu"), torch.float32).actor.parameters(), strict=True))

@@ -21,25 +21,29 @@ from swimrl.evaluation.records import refuse_overwrite, write_json
 
 log = logging.getLogger(__name__)
 RECORD = "gain_scan.json"
+TABLE = "gain_scan.md"
 
 
 def check(cfg: DictConfig, out: Path | None) -> tuple[GainScanConfig, bool]:
-    """Parse and check the config; refuse to replace a finished scan (``overwrite``)."""
+    """Parse and check the config; refuse to replace a scan's record or table unless
+    ``overwrite``."""
     c, overwrite = gain_scan_config(cfg), eval_config(cfg).overwrite
     if out is not None:
-        refuse_overwrite(out / RECORD, overwrite)
+        for name in (RECORD, TABLE):
+            refuse_overwrite(out / name, overwrite)
     return c, overwrite
 
 
 @command("gain_scan", check=check)
 def main(cfg: DictConfig) -> list[dict]:
-    c, overwrite = check(cfg, run_dir())
+    out = run_dir()
+    c, overwrite = check(cfg, out)
     rows = gain_scan(c)
     table = markdown(rows)
-    target = write_json({"policy": c.policy, "gains": list(c.gains), "rows": rows},
-                        run_dir() / RECORD, overwrite=overwrite)
-    (run_dir() / "gain_scan.md").write_text(table + "\n")
     print(table)
+    (out / TABLE).write_text(table)
+    record = {"policy": c.policy, "gains": list(c.gains), "rows": rows, "config": c.setup.record}
+    target = write_json(record, out / RECORD, overwrite=overwrite)  # last: marks it finished
     log.info("wrote %s", target)
     return rows
 

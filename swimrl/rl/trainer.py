@@ -202,8 +202,9 @@ class PPOTrainer:
     def update(self, data: TensorDict) -> dict[str, torch.Tensor]:
         """GAE + ``epochs x minibatches`` clipped-PPO steps on one batch; mean loss terms.
 
-        Each epoch gathers the batch once in a fresh random order and takes its minibatches
-        as consecutive slices; the loss terms are stacked and averaged once per update."""
+        Each epoch gathers the samples of its minibatches once, in a fresh random order, and
+        takes the minibatches as consecutive slices; the loss terms are stacked and averaged
+        once per update."""
         plan = self.plan
         with torch.no_grad(), record_function("ppo/gae"):
             data = self.gae(data)
@@ -213,10 +214,11 @@ class PPOTrainer:
         clip = self.cfg.optim.max_grad_norm
         groups = [list(self.actor.parameters()), list(self.critic.parameters())]
         step = self._compiled_loss_backward()
-        log_keys = None
+        log_keys: list[str] | None = None
         for _ in range(plan.epochs):
             with record_function("ppo/minibatch"):
-                shuffled = flat[torch.randperm(n, device=flat.device)]
+                used = torch.randperm(n, device=flat.device)[: plan.minibatches_per_epoch * mb]
+                shuffled = flat[used]
             for k in range(plan.minibatches_per_epoch):
                 batch = shuffled[k * mb : (k + 1) * mb]
                 with record_function("ppo/loss_backward"):
@@ -224,7 +226,7 @@ class PPOTrainer:
                 with record_function("ppo/clip_optimizer"):
                     if clip is not None:
                         for g in groups:
-                            torch.nn.utils.clip_grad_norm_(g, float(clip), foreach=True)
+                            torch.nn.utils.clip_grad_norm_(g, float(clip))
                     for opt in self.optimizers:
                         opt.step()
                         opt.zero_grad(set_to_none=True)
@@ -233,6 +235,7 @@ class PPOTrainer:
                 terms.append(out.select(*log_keys))
         for sch in self.schedulers:
             sch.step()
+        assert log_keys is not None  # epochs >= 1 and minibatches_per_epoch >= 1 (TrainPlan)
         stacked = torch.stack(terms)  # (gradient steps,) + the loss terms' shapes
         return {k: stacked[k].float().reshape(len(terms), -1).mean() for k in log_keys}
 
