@@ -212,7 +212,7 @@ def gain_scan_config(cfg: DictConfig) -> GainScanConfig:
     """``swimrl-gain-scan`` (``conf/gain_scan.yaml``)."""
     ev = eval_config(cfg)
     return GainScanConfig(setup=ev.setup, policy=ev.policy,
-                          gains=tuple(_float(g) for g in cfg.gains))
+                          gains=tuple(_float(g) for g in cfg.gains), overwrite=ev.overwrite)
 
 
 def figures_config(cfg: DictConfig) -> FiguresConfig:

@@ -30,11 +30,13 @@ from swimrl.policies.files import load_policy
 
 @dataclass(frozen=True)
 class GainScanConfig:
-    """The policy ``policy`` evaluated on ``setup`` with its mean scaled by each of ``gains``."""
+    """The policy ``policy`` evaluated on ``setup`` with its mean scaled by each of ``gains``;
+    ``overwrite``: replace an earlier scan's record."""
 
     setup: EvalSetup
     policy: str
     gains: tuple[float, ...]
+    overwrite: bool = False
 
     def __post_init__(self) -> None:
         require(bool(self.gains) and all(g >= 0 for g in self.gains), "gains", list(self.gains),

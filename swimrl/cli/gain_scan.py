@@ -16,7 +16,7 @@ from omegaconf import DictConfig
 
 from swimrl.analysis.gain_scan import GainScanConfig, gain_scan, markdown
 from swimrl.cli import command, run_dir
-from swimrl.config import eval_config, gain_scan_config
+from swimrl.config import gain_scan_config
 from swimrl.evaluation.records import refuse_overwrite, write_json
 
 log = logging.getLogger(__name__)
@@ -24,26 +24,26 @@ RECORD = "gain_scan.json"
 TABLE = "gain_scan.md"
 
 
-def check(cfg: DictConfig, out: Path | None) -> tuple[GainScanConfig, bool]:
+def check(cfg: DictConfig, out: Path | None) -> GainScanConfig:
     """Parse and check the config; refuse to replace a scan's record or table unless
     ``overwrite``."""
-    c, overwrite = gain_scan_config(cfg), eval_config(cfg).overwrite
+    c = gain_scan_config(cfg)
     if out is not None:
         for name in (RECORD, TABLE):
-            refuse_overwrite(out / name, overwrite)
-    return c, overwrite
+            refuse_overwrite(out / name, c.overwrite)
+    return c
 
 
 @command("gain_scan", check=check)
 def main(cfg: DictConfig) -> list[dict]:
     out = run_dir()
-    c, overwrite = check(cfg, out)
+    c = check(cfg, out)
     rows = gain_scan(c)
     table = markdown(rows)
     print(table)
     (out / TABLE).write_text(table)
     record = {"policy": c.policy, "gains": list(c.gains), "rows": rows, "config": c.setup.record}
-    target = write_json(record, out / RECORD, overwrite=overwrite)  # last: marks it finished
+    target = write_json(record, out / RECORD, overwrite=c.overwrite)  # last: marks it finished
     log.info("wrote %s", target)
     return rows
 
