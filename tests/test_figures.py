@@ -229,3 +229,14 @@ def test_signal_ablation_records_summary_and_panel(tmp_path):
         {"config": json.loads((stale / "metrics.json").read_text())["config"],
          "per_flow": [0.7, 0.8]}))
     refused("stale comparison")
+
+
+def test_find_curves_follows_linked_run_directories(tmp_path):
+    """``paper_runs/ku*_seed*`` are links to the runs: their curves are found, by link name."""
+    run = tmp_path / "runs" / "ku10_seed0"
+    run.mkdir(parents=True)
+    (run / "curves.csv").write_text("frames,eval/R_hat\n0,0.2\n")
+    (tmp_path / "chosen").mkdir()
+    (tmp_path / "chosen" / "ku10_seed3").symlink_to(run, target_is_directory=True)
+    assert figures.find_curves(tmp_path / "chosen") == {
+        "ku10_seed3": tmp_path / "chosen" / "ku10_seed3" / "curves.csv"}

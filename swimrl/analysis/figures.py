@@ -16,6 +16,7 @@ from __future__ import annotations
 import hashlib
 import json
 import math
+import os
 import textwrap
 import time
 from collections import Counter
@@ -117,9 +118,9 @@ class FiguresConfig:
     seed: int = 0
     policies: str = "pretrained"
     """Smart policy at Ku: ``<policies>/ku0.1`` ... ``<policies>/ku1e7`` (a policy spec)."""
-    results: Path = Path("docs/results/smart_ku_sweep")
+    results: Path = Path("docs/results/paper_protocol")
     """``comparison.json`` records of smartPerformance(a)."""
-    curves: Path = Path("docs/results/long_runs")
+    curves: Path = Path("docs/results/paper_runs")
     """Searched for ``curves.csv`` (trainingCurves)."""
     fits: Path = Path("docs/results/minimal_fits")
     """``ku*/fit.json`` of ``swimrl-fit-minimal`` at each Ku (ablation (b), (c))."""
@@ -510,8 +511,11 @@ def _shown(path: Path) -> str:
 
 # -- Fig. trainingCurves ---------------------------------------------------------------------
 def find_curves(root: Path) -> dict[str, Path]:
-    """``curves.csv`` files under ``root``, labelled by their run directory."""
-    return {p.parent.name: p for p in sorted(Path(root).rglob("curves.csv"))}
+    """``curves.csv`` files under ``root``, labelled by their run directory; linked run
+    directories are followed (``docs/results/paper_runs/ku*_seed*`` are links)."""
+    found = (Path(d) / "curves.csv" for d, _, files in os.walk(root, followlinks=True)
+             if "curves.csv" in files)
+    return {p.parent.name: p for p in sorted(found)}
 
 
 def _ku_value(group: str) -> float:
