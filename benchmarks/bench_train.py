@@ -16,16 +16,22 @@ graph on the first one) of
   ``U fpb / (U (collect + update) + redraw)`` with ``U = N / L`` updates per episode
   (a long run's rate; the few timed updates above never reach an episode's end).
 
-Variants (``--variants``, comma-separated):
+Layouts (``--presets``, comma-separated ``train_preset`` names; default
+``long_floor05,parallel``: the protocol's preset against the swimmer-parallel layout) times
+code variants (``--variants``, comma-separated):
 
 * ``before``: the code as it was before the compiled path, emulated within the current
   code (whose update bookkeeping it shares): eager, ``ClipPPOLoss`` computing the
   Monte-Carlo entropy of the ``TanhNormal`` although its coefficient is 0
   (``entropy_bonus=True``), and the flow redraw through full-grid FFTs;
 * ``eager``: no entropy sample when the coefficient is 0, eager;
-* ``compiled``: the same with ``train.compile=true`` (what the presets use).
+* ``compiled``: the same with ``train.compile=true`` (what the presets use on the CPU);
+* ``graphed``: ``train.compile=true train.cudagraphs=true`` (CUDA only: the gradient step, the
+  GAE and the policy compiled and captured in CUDA graphs).
 
-    python benchmarks/bench_train.py --preset bigbatch --kubo 10 --updates 5
+    python benchmarks/bench_train.py --kubo 10 --updates 5                 # CPU, one thread
+    python benchmarks/bench_train.py --device cuda --variants compiled,graphed
+    python benchmarks/bench_train.py --presets bigbatch --variants before,compiled
 """
 
 from __future__ import annotations
@@ -48,6 +54,7 @@ VARIANTS = {
     "before": ["train.compile=false"],
     "eager": ["train.compile=false"],
     "compiled": ["train.compile=true"],
+    "graphed": ["train.compile=true", "train.cudagraphs=true"],
 }
 LABELS = ("ppo/gae", "ppo/minibatch", "ppo/loss_backward", "ppo/clip_optimizer")
 
@@ -55,20 +62,23 @@ LABELS = ("ppo/gae", "ppo/minibatch", "ppo/loss_backward", "ppo/clip_optimizer")
 class Variant:
     """One training stack and its collector iterator."""
 
-    def __init__(self, name: str, overrides: list[str], run_dir: Path):
+    def __init__(self, preset: str, name: str, overrides: list[str], run_dir: Path):
         with initialize_config_module("swimrl.conf", version_base="1.3"):
-            cfg = train_config(compose("train", overrides=overrides + VARIANTS[name]))
+            cfg = train_config(compose("train", overrides=[f"train_preset={preset}"] + overrides
+                                       + VARIANTS[name]))
         plan = make_plan(cfg)
         cfg.runtime.apply()
         device, dtype = cfg.runtime.device, cfg.runtime.dtype
-        self.name, self.plan = name, plan
+        self.name, self.plan = f"{preset}/{name}", plan
         self.sync = torch.device(device).type == "cuda"  # time kernels, not their launches
-        self.trainer = PPOTrainer(cfg, plan, run_dir / name, device, dtype)
+        self.trainer = PPOTrainer(cfg, plan, run_dir / preset / name, device, dtype)
         if name == "before":
             self.trainer.loss.entropy_bonus = True
             self.trainer.env.flow._synthesis = None  # full-grid FFT redraw
+        graphs = bool(cfg.train.cudagraphs)
         self.collector = rlb.make_collector(
-            self.trainer.env, self.trainer.actor, plan, 10**12, device
+            self.trainer.env, self.trainer.actor, plan, 10**12, device,
+            compile_policy=graphs and bool(cfg.train.compile), cudagraph_policy=graphs,
         )
         self.batches = iter(self.collector)
         self.collect_s: list[float] = []
@@ -102,7 +112,8 @@ class Variant:
         return statistics.median(times)
 
     def breakdown(self) -> dict[str, float]:
-        """Seconds per label over one profiled update (profiler overhead included)."""
+        """Seconds per label over one profiled update (profiler overhead included; a step
+        replayed from a CUDA graph shows no labels inside it)."""
         data = next(self.batches)
         with profile() as prof:
             self.trainer.update(data)
@@ -112,9 +123,10 @@ class Variant:
 
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--preset", default="bigbatch")
+    ap.add_argument("--presets", default="long_floor05,parallel")
     ap.add_argument("--kubo", default="10")
-    ap.add_argument("--variants", default="before,compiled")
+    ap.add_argument("--variants", default="compiled")
+    ap.add_argument("--device", default="cpu")
     ap.add_argument("--updates", type=int, default=5)
     ap.add_argument("--warmup", type=int, default=2)
     ap.add_argument("--redraws", type=int, default=2)
@@ -123,29 +135,34 @@ def main() -> None:
     ap.add_argument("overrides", nargs="*", help="extra config overrides")
     args = ap.parse_args()
     torch.set_num_threads(args.threads)
-    base = [f"train_preset={args.preset}", f"flow.kubo={args.kubo}", "seed=0", "threads=1"]
+    base = [f"flow.kubo={args.kubo}", "seed=0", "threads=1", f"device={args.device}"]
     base += list(args.overrides)
-    variants = [Variant(v, base, Path(args.out)) for v in args.variants.split(",")]
+    variants = [Variant(p, v, base, Path(args.out))
+                for p in args.presets.split(",") for v in args.variants.split(",")]
     for i in range(args.warmup + args.updates):
         for v in variants:
             v.step(record=i >= args.warmup)
-    fpb = variants[0].plan.frames_per_batch
-    print(f"preset={args.preset} Ku={args.kubo} frames/update={fpb} threads={args.threads} "
-          f"(median of {args.updates} updates, variants interleaved)")
-    head = f"{'variant':<10}{'env frames/s':>14}{'collect s':>11}{'update s':>10}{'frames/s':>10}"
+    device = torch.cuda.get_device_name() if args.device.startswith("cuda") else "cpu"
+    print(f"Ku={args.kubo} device={args.device} ({device}) threads={args.threads} "
+          f"(median of {args.updates} updates after {args.warmup}, variants interleaved)")
+    width = max(12, *(len(v.name) + 2 for v in variants))
+    head = (f"{'variant':<{width}}{'swimmers':>9}{'frames':>9}{'env frames/s':>14}"
+            f"{'collect s':>11}{'update s':>10}{'frames/s':>10}")
     print(head + "".join(f"{k.split('/')[1]:>16}" for k in LABELS)
           + f"{'redraw s':>10}{'episode frames/s':>18}")
-    plan = variants[0].plan
-    per_episode = plan.params.n_decisions / plan.rollout_steps  # updates per episode, U
     overall, episode = {}, {}
     for v in variants:
+        plan = v.plan
+        fpb = plan.frames_per_batch
+        per_episode = plan.params.n_decisions / plan.rollout_steps  # updates per episode, U
         c, u = statistics.median(v.collect_s), statistics.median(v.update_s)
         overall[v.name] = fpb / (c + u)
         parts = v.breakdown()
         r = v.redraw(args.redraws)
         episode[v.name] = per_episode * fpb / (per_episode * (c + u) + r)
         print(
-            f"{v.name:<10}{fpb / c:>14.0f}{c:>11.3f}{u:>10.3f}{overall[v.name]:>10.0f}"
+            f"{v.name:<{width}}{plan.n_flows * plan.n_swimmers:>9}{fpb:>9}{fpb / c:>14.0f}"
+            f"{c:>11.3f}{u:>10.3f}{overall[v.name]:>10.0f}"
             + "".join(f"{parts[k]:>16.3f}" for k in LABELS)
             + f"{r:>10.2f}{episode[v.name]:>18.0f}"
         )

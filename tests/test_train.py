@@ -521,7 +521,7 @@ def test_resumed_run_continues_compiled(train_cfg, tmp_path, monkeypatch):
 
     monkeypatch.setattr(PPOTrainer, "_compiled_loss_backward", spy)
     m = train(train_cfg("resume=true", *opts), tmp_path)
-    assert m["training"]["updates"] == 4 and used == [True, True]
+    assert m["training"]["updates"] == 4 and used == [True]  # built once, on the first update
 
 
 def test_update_takes_the_minibatches_of_a_fresh_permutation_per_epoch(train_cfg, tmp_path):
@@ -568,3 +568,113 @@ def test_update_takes_the_minibatches_of_a_fresh_permutation_per_epoch(train_cfg
     assert any(not torch.equal(p, q) for p, q in
                zip(fast.actor.parameters(), PPOTrainer(c, make_plan(c), tmp_path / "c",
                    torch.device("cpu"), torch.float32).actor.parameters(), strict=True))
+
+
+def _params_after_updates(c, run_dir, batches) -> list[torch.Tensor]:
+    """Actor and critic parameters after one :meth:`PPOTrainer.update` per batch (the
+    minibatch order seeded per update)."""
+    device = c.runtime.device
+    t = PPOTrainer(c, make_plan(c), run_dir, device, torch.float32)
+    for i, data in enumerate(batches):
+        torch.manual_seed(100 + i)
+        stats = t.update(data.clone().to(device))
+        assert all(torch.isfinite(v) for v in stats.values())
+    return [p.detach().cpu().clone() for p in (*t.actor.parameters(), *t.critic.parameters())]
+
+
+def _batches(c, tmp_path, n: int = 3) -> list:
+    from swimrl.rl.builders import make_collector
+
+    t = PPOTrainer(c, make_plan(c), tmp_path / "collect", c.runtime.device, torch.float32)
+    collector = make_collector(t.env, t.actor, t.plan, n * t.plan.frames_per_batch,
+                               c.runtime.device)
+    batches = [b.clone() for b in collector]
+    collector.shutdown()
+    return batches
+
+
+def test_compiled_updates_give_the_eager_parameters(train_cfg, tmp_path):
+    """``train.compile=true`` (the CPU path): the parameters after three whole updates (GAE,
+    4 epochs of minibatch steps, clipping, Adam) equal the eager ones to float32 round-off,
+    and the updates moved them."""
+    eager = train_config(train_cfg("train.compile=false"))
+    batches = _batches(eager, tmp_path)
+    ref = _params_after_updates(eager, tmp_path / "eager", batches)
+    comp = _params_after_updates(train_config(train_cfg("train.compile=true")),
+                                 tmp_path / "compiled", batches)
+    init = _params_after_updates(eager, tmp_path / "init", [])
+    for p_c, p_e in zip(comp, ref, strict=True):
+        torch.testing.assert_close(p_c, p_e, rtol=1e-4, atol=1e-5)
+    assert max(float((p - q).abs().max()) for p, q in zip(ref, init, strict=True)) > 1e-3
+
+
+@pytest.mark.gpu
+@pytest.mark.parametrize("compile_", ["false", "true"])
+def test_cuda_graphed_updates_give_the_eager_parameters(train_cfg, tmp_path, compile_):
+    """``train.cudagraphs=true`` on CUDA (the whole gradient step and the GAE captured in CUDA
+    graphs, optionally compiled): the parameters after six updates (past the graphs' warm-up
+    steps) equal those of the eager CUDA update to float32 round-off."""
+    opts = ("device=cuda", "kernel=eager")
+    eager = train_config(train_cfg("train.compile=false", *opts))
+    batches = _batches(eager, tmp_path, n=6)
+    ref = _params_after_updates(eager, tmp_path / "eager", batches)
+    graphed = train_config(train_cfg(f"train.compile={compile_}", "train.cudagraphs=true", *opts))
+    got = _params_after_updates(graphed, tmp_path / "graphed", batches)
+    for p_g, p_e in zip(got, ref, strict=True):
+        torch.testing.assert_close(p_g, p_e, rtol=1e-4, atol=1e-5)
+
+
+def test_cudagraphs_on_the_cpu_is_refused(train_cfg):
+    """``train.cudagraphs=true`` with ``device=cpu``: one line naming the key, before compute."""
+    with pytest.raises(ConfigError, match=r"train\.cudagraphs=True.*device=cpu"):
+        train_config(train_cfg("train.cudagraphs=true"))
+
+
+def _parallel(compose_cfg, *overrides):
+    """``train_preset=parallel`` at its own sizes, on the test's small grid and episode."""
+    return compose_cfg(SMALL + ["train_preset=parallel", "train.progress=false",
+                                "train.eval_flows=1", "train.eval_swimmers=4",
+                                "eval.n_flows=1", "eval.n_swimmers=8", *overrides],
+                       name="train")
+
+
+def test_parallel_preset_is_long_floor05_with_the_swimmer_parallel_layout():
+    """``train_preset=parallel``: long_floor05 (budget, decay, sigma bound, loss) with 64 x 64
+    swimmers per env step, rollouts of 16, minibatches of 8192 and sqrt-scaled rates."""
+    from hydra import compose, initialize_config_module
+
+    with initialize_config_module("swimrl.conf", version_base="1.3"):
+        par = compose("train", overrides=["train_preset=parallel"])
+        ref = compose("train", overrides=["train_preset=long_floor05"])
+    plan = validate_train_cfg(par)
+    assert plan.n_flows * plan.n_swimmers == 4096 and plan.rollout_steps == 16
+    assert plan.gradient_steps_per_update == 32 and plan.epochs == 4
+    assert par.optim.lr_actor == pytest.approx(3e-3 * math.sqrt(8192 / 2560), rel=0.01)
+    assert par.optim.lr_critic == pytest.approx(1e-3 * math.sqrt(8192 / 2560), rel=0.01)
+    for key in ("n_flows", "n_swimmers", "frames_per_batch", "minibatch_size", "eval_every"):
+        par.train[key] = ref.train[key]
+    par.optim.lr_actor, par.optim.lr_critic = ref.optim.lr_actor, ref.optim.lr_critic
+    assert par == ref
+
+
+def test_parallel_layout_env_specs(compose_cfg):
+    """The layout's training env (4096 swimmers in 64 flows) passes TorchRL's spec check."""
+    from torchrl.envs.utils import check_env_specs
+
+    c = train_config(_parallel(compose_cfg))
+    env = make_env(c, make_plan(c))
+    assert tuple(env.batch_size) == (64, 64)
+    check_env_specs(env)
+
+
+def test_parallel_layout_two_updates_then_resume(compose_cfg, tmp_path):
+    """Smoke run of the layout on the CPU (its sizes, compiled loss): one update, stopped;
+    ``resume=true`` continues it with the second update of the same layout and finishes."""
+    opts = ("train.total_frames=131072", "train.eval_every=1")
+    assert train(_parallel(compose_cfg, "train.stop_after_updates=1", *opts), tmp_path) is None
+    ck = load_file(checkpoint_path(tmp_path))
+    assert ck["counters"]["updates"] == 1 and ck["config"]["train"]["n_swimmers"] == 64
+    m = train(_parallel(compose_cfg, "resume=true", *opts), tmp_path)
+    assert m["training"]["updates"] == 2 and m["training"]["frames"] == 131072
+    curve = scalars(tmp_path)["eval/R_hat"]
+    assert [step for step, _ in curve] == [0, 65536, 131072]

@@ -87,11 +87,14 @@ def make_critic(cfg: TrainConfig, env: EnvBase, device, dtype):
     )
 
 
-def make_collector(env: EnvBase, actor, plan: TrainPlan, total_frames: int, device) -> Collector:
+def make_collector(env: EnvBase, actor, plan: TrainPlan, total_frames: int, device,
+                   compile_policy: bool = False, cudagraph_policy: bool = False) -> Collector:
     """TorchRL ``Collector`` over the batched env; output batches ``(F, S, L)`` (time last).
 
     The env truncates episodes itself after ``N`` decisions; the collector resets the done
-    swimmers (partial ``_reset``), so rollouts run across episode boundaries.
+    swimmers (partial ``_reset``), so rollouts run across episode boundaries. On CUDA
+    (``train.cudagraphs``) the collector compiles the policy and captures it in a CUDA graph
+    (TorchRL's ``compile_policy`` / ``cudagraph_policy``).
     """
     return Collector(
         env,
@@ -102,6 +105,8 @@ def make_collector(env: EnvBase, actor, plan: TrainPlan, total_frames: int, devi
         storing_device=device,
         auto_register_policy_transforms=False,
         trust_policy=True,
+        compile_policy={"mode": "default"} if compile_policy else None,
+        cudagraph_policy=bool(cudagraph_policy),
     )
 
 
@@ -130,11 +135,19 @@ def make_loss(cfg: TrainConfig, actor, critic) -> tuple[ClipPPOLoss, GAE]:
 
 
 def make_optimizers(cfg: TrainConfig, actor, critic) -> tuple[torch.optim.Adam, torch.optim.Adam]:
-    """Separate Adam optimisers (paper: ``4e-4`` actor, ``8e-5`` critic)."""
+    """Separate Adam optimisers (paper: ``4e-4`` actor, ``8e-5`` critic). Under
+    ``train.cudagraphs`` the learning rates are device tensors and the steps capturable (as
+    TorchRL's ``sota-implementations/ppo``), so a captured step reads the scheduled rate."""
     eps = float(cfg.optim.eps)
-    return (
-        torch.optim.Adam(actor.parameters(), lr=float(cfg.optim.lr_actor), eps=eps),
-        torch.optim.Adam(critic.parameters(), lr=float(cfg.optim.lr_critic), eps=eps),
+    lrs = float(cfg.optim.lr_actor), float(cfg.optim.lr_critic)
+    if not cfg.train.cudagraphs:
+        return (torch.optim.Adam(actor.parameters(), lr=lrs[0], eps=eps),
+                torch.optim.Adam(critic.parameters(), lr=lrs[1], eps=eps))
+    device = cfg.runtime.device
+    return tuple(
+        torch.optim.Adam(net.parameters(), lr=torch.tensor(lr, device=device), eps=eps,
+                         capturable=True)
+        for net, lr in ((actor, lrs[0]), (critic, lrs[1]))
     )
 
 

@@ -26,6 +26,7 @@ from __future__ import annotations
 from dataclasses import dataclass, replace
 
 import numpy as np
+import torch
 
 from swimrl.env import EnvParams
 from swimrl.errors import as_bool, as_float, as_int, one_of, require
@@ -67,6 +68,7 @@ class TrainSettings:
     progress: bool = True
     compare_baselines: bool = False
     compile: bool = False  # torch.compile of loss + backward (rl.trainer)
+    cudagraphs: bool = False  # CUDA graphs of the gradient step, GAE and policy (CUDA only)
 
     def __post_init__(self) -> None:
         def k(key: str) -> str:
@@ -101,6 +103,7 @@ class TrainSettings:
                      "'auto' or a number > 0")
         as_bool(k("progress"), self.progress)
         as_bool(k("compile"), self.compile)
+        as_bool(k("cudagraphs"), self.cudagraphs)
         as_bool(k("compare_baselines"), self.compare_baselines)
 
 
@@ -170,6 +173,10 @@ class TrainConfig:
     def __post_init__(self) -> None:
         as_bool("resume", self.resume)
         as_bool("overwrite", self.overwrite)
+        device = self.evaluation.runtime.device
+        require(not self.train.cudagraphs or torch.device(device).type == "cuda",
+                "train.cudagraphs", self.train.cudagraphs,
+                f"false on device={device} (CUDA graphs need device=cuda)")
 
     @property
     def seed(self) -> int:

@@ -43,6 +43,7 @@ RESUME_FREE_KEYS = {
     "policy",
     "train.progress",
     "train.compile",
+    "train.cudagraphs",
     "train.compare_baselines",
     "train.stop_after_updates",
     "train.checkpoint_every",

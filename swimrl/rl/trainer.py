@@ -81,6 +81,8 @@ class PPOTrainer:
         self.meta = policy_meta(params, cfg.model, str(dtype).replace("torch.", ""))
         self.config = cfg.record
         self._loss_fn = None  # built on the first update (see _compiled_loss_backward)
+        self._step_fn = None  # the gradient step, built on the first update (_step_function)
+        self._gae_fn = self.gae  # captured in a CUDA graph under train.cudagraphs
         self.logger = None
         self.last_eval: dict | None = None
         self.last_train_r_hat: float | None = None
@@ -122,6 +124,7 @@ class PPOTrainer:
             opt.load_state_dict(st)
         for sch, st in zip(self.schedulers, ck["schedulers"], strict=True):
             sch.load_state_dict(st)
+        self._match_optimizers_to_device()
         restore_rng(ck["rng"], self.swimmer_env.generator)
         self.counters = dict(ck["counters"])
         # the curve up to the checkpoint, kept where the event files may be gone (a run
@@ -131,6 +134,23 @@ class PPOTrainer:
             self.curve_base = {step: row for step, row in read_curves_csv(curves).items()
                                if step <= self.counters["frames"]}
         return ck
+
+    def _match_optimizers_to_device(self) -> None:
+        """After loading optimiser states written by another path: learning rates as device
+        tensors and capturable steps under ``train.cudagraphs``, plain floats otherwise (a
+        checkpoint moves between the CPU and a CUDA-graphed run)."""
+        graphs = bool(self.cfg.train.cudagraphs)
+        for opt in self.optimizers:
+            for group in opt.param_groups:
+                for key in ("lr", "initial_lr"):
+                    if key in group:
+                        lr = float(group[key])
+                        group[key] = torch.tensor(lr, device=self.device) if graphs else lr
+                group["capturable"] = graphs
+            for state in opt.state.values():
+                if "step" in state:
+                    state["step"] = state["step"].to(
+                        self.device if graphs else "cpu", torch.float32)
 
     def save_policy(self, path: Path | None = None) -> Path:
         """The deterministic policy as ``<run>/policy.pt`` (or ``path``)."""
@@ -199,6 +219,53 @@ class PPOTrainer:
                 self._loss_fn = loss_backward
         return self._loss_fn
 
+    def _gradient_step(self, loss_backward) -> TensorDict:
+        """One clipped-PPO gradient step: ``loss_backward`` on a minibatch, the gradient norm of
+        actor and critic clipped separately, one Adam step each, gradients released."""
+        clip = self.cfg.optim.max_grad_norm
+
+        def step(batch: TensorDict) -> TensorDict:
+            with record_function("ppo/loss_backward"):
+                out = loss_backward(batch)
+            with record_function("ppo/clip_optimizer"):
+                if clip is not None:
+                    for net in (self.actor, self.critic):
+                        torch.nn.utils.clip_grad_norm_(list(net.parameters()), float(clip))
+                for opt in self.optimizers:
+                    opt.step()
+                    opt.zero_grad(set_to_none=True)
+            return out
+
+        return step
+
+    def _step_function(self):
+        """The gradient step of :meth:`update`, built once:
+
+        * eager, or with the loss compiled (``train.compile``, the CPU path): loss + backward
+          (:meth:`_compiled_loss_backward`), clipping and Adam as separate calls;
+        * ``train.cudagraphs`` (CUDA): the whole step (loss, backward, clipping, both Adam
+          steps) compiled (``train.compile``) and captured in one CUDA graph by tensordict's
+          ``CudaGraphModule``, as TorchRL's ``sota-implementations/ppo`` does; the GAE is
+          captured too. A step is then one graph replay: no host synchronisation and no
+          Python work per kernel inside an update.
+        """
+        if self._step_fn is not None:
+            return self._step_fn
+        if not self.cfg.train.cudagraphs:
+            self._step_fn = self._gradient_step(self._compiled_loss_backward())
+            return self._step_fn
+        from tensordict.nn import CudaGraphModule
+        from torchrl._utils import compile_with_warmup
+
+        step = self._gradient_step(self._loss_backward)
+        gae = self.gae
+        if self.cfg.train.compile:
+            step = compile_with_warmup(step, mode="default", warmup=1)
+            gae = compile_with_warmup(gae, mode="default", warmup=1)
+        self._step_fn = CudaGraphModule(step, in_keys=[], out_keys=[], warmup=5)
+        self._gae_fn = CudaGraphModule(gae)
+        return self._step_fn
+
     def update(self, data: TensorDict) -> dict[str, torch.Tensor]:
         """GAE + ``epochs x minibatches`` clipped-PPO steps on one batch; mean loss terms.
 
@@ -206,30 +273,19 @@ class PPOTrainer:
         takes the minibatches as consecutive slices; the loss terms are stacked and averaged
         once per update."""
         plan = self.plan
+        step = self._step_function()
         with torch.no_grad(), record_function("ppo/gae"):
-            data = self.gae(data)
+            data = self._gae_fn(data)
         flat = data.select(*self._loss_keys(data), strict=False).reshape(-1)
         n, mb = flat.numel(), plan.minibatch_size
         terms: list[TensorDict] = []
-        clip = self.cfg.optim.max_grad_norm
-        groups = [list(self.actor.parameters()), list(self.critic.parameters())]
-        step = self._compiled_loss_backward()
         log_keys: list[str] | None = None
         for _ in range(plan.epochs):
             with record_function("ppo/minibatch"):
                 used = torch.randperm(n, device=flat.device)[: plan.minibatches_per_epoch * mb]
                 shuffled = flat[used]
             for k in range(plan.minibatches_per_epoch):
-                batch = shuffled[k * mb : (k + 1) * mb]
-                with record_function("ppo/loss_backward"):
-                    out = step(batch)
-                with record_function("ppo/clip_optimizer"):
-                    if clip is not None:
-                        for g in groups:
-                            torch.nn.utils.clip_grad_norm_(g, float(clip))
-                    for opt in self.optimizers:
-                        opt.step()
-                        opt.zero_grad(set_to_none=True)
+                out = step(shuffled[k * mb : (k + 1) * mb])
                 if log_keys is None:
                     log_keys = [key for key in LOSS_LOG_KEYS if key in out.keys()]  # noqa: SIM118
                 terms.append(out.select(*log_keys))
@@ -258,7 +314,9 @@ class PPOTrainer:
         if self.counters["updates"] == 0 and plan.eval_every:
             self._periodic_eval()
         collector = rlb.make_collector(
-            self.env, self.actor, plan, n_run * plan.frames_per_batch, self.device
+            self.env, self.actor, plan, n_run * plan.frames_per_batch, self.device,
+            compile_policy=cfg.train.cudagraphs and cfg.train.compile,
+            cudagraph_policy=cfg.train.cudagraphs,
         )
         bar = tqdm(
             total=plan.total_frames,
@@ -279,7 +337,7 @@ class PPOTrainer:
                 if bool(done.any()):
                     dist = data["next", "distance"].squeeze(-1)[done]
                     r_hat_train = float(dist.mean()) / ref
-                lrs = [s.get_last_lr()[0] for s in self.schedulers]
+                lrs = [float(s.get_last_lr()[0]) for s in self.schedulers]
                 action_abs = data["action"].abs().mean()
                 stats = self.update(data)
                 self._stop_if_nonfinite(stats)
