@@ -1,8 +1,8 @@
 """Throughput of PPO training: env frames/s, seconds per update, overall frames/s, breakdown.
 
 Builds the training stack of ``swimrl-train`` for each variant (a list of config overrides
-on top of ``--preset``), then alternates the variants update by update (A/B/A/B...: the
-machine's drift hits all of them alike) and prints, per variant, the median over
+on top of each preset of ``--presets``), then alternates the variants update by update
+(A/B/A/B...: the machine's drift hits all of them alike) and prints, per variant, the median over
 ``--updates`` measured updates (after ``--warmup`` updates: ``torch.compile`` builds its
 graph on the first one) of
 

@@ -120,6 +120,7 @@ def make_loss(cfg: TrainConfig, actor, critic) -> tuple[ClipPPOLoss, GAE]:
         lmbda=float(c.gae_lambda),
         value_network=critic,
         average_gae=False,
+        value_chunk_size=cfg.train.gae_chunk,  # the same values, cache-sized critic calls
     )
     loss = ClipPPOLoss(
         actor,

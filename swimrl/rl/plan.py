@@ -69,6 +69,7 @@ class TrainSettings:
     compare_baselines: bool = False
     compile: bool = False  # torch.compile of loss + backward (rl.trainer)
     cudagraphs: bool = False  # CUDA graphs of the gradient step, GAE and policy (CUDA only)
+    gae_chunk: int | None = None  # critic evaluations of the GAE in chunks of this many samples
 
     def __post_init__(self) -> None:
         def k(key: str) -> str:
@@ -104,6 +105,8 @@ class TrainSettings:
         as_bool(k("progress"), self.progress)
         as_bool(k("compile"), self.compile)
         as_bool(k("cudagraphs"), self.cudagraphs)
+        if self.gae_chunk is not None:
+            as_int(k("gae_chunk"), self.gae_chunk)
         as_bool(k("compare_baselines"), self.compare_baselines)
 
 

@@ -44,6 +44,7 @@ RESUME_FREE_KEYS = {
     "train.progress",
     "train.compile",
     "train.cudagraphs",
+    "train.gae_chunk",
     "train.compare_baselines",
     "train.stop_after_updates",
     "train.checkpoint_every",
