@@ -43,7 +43,7 @@ $PY -m pytest -q -p no:cacheprovider -m gpu tests/test_train.py tests/test_gpu.p
 
 # 2. throughput, the layouts side by side (variants interleaved update by update)
 $PY benchmarks/bench_train.py --device "$DEVICE" --threads $THREADS \
-    --presets long_floor05,parallel,parallel_gpu --variants $VARIANTS --updates 5 --warmup 6 \
+    --presets long_floor05,parallel,parallel_gpu --variants $VARIANTS ${BENCH_ARGS:---updates 5 --warmup 6} \
     2>&1 | grep -v Warning | tee "$OUT/bench_train_$DEVICE.txt"
 
 # 3. the paper's budget at Ku = 10 from scratch, timed
