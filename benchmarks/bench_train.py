@@ -75,10 +75,8 @@ class Variant:
         if name == "before":
             self.trainer.loss.entropy_bonus = True
             self.trainer.env.flow._synthesis = None  # full-grid FFT redraw
-        graphs = bool(cfg.train.cudagraphs)
         self.collector = rlb.make_collector(
-            self.trainer.env, self.trainer.actor, plan, 10**12, device,
-            compile_policy=graphs and bool(cfg.train.compile), cudagraph_policy=graphs,
+            self.trainer.env, self.trainer.actor, plan, 10**12, device, cfg.train
         )
         self.batches = iter(self.collector)
         self.collect_s: list[float] = []

@@ -25,7 +25,7 @@ from torchrl.record.loggers.tensorboard import TensorboardLogger
 
 from swimrl.env import SwimmerEnv
 from swimrl.policies.networks import tanh_normal_actor, value_critic
-from swimrl.rl.plan import TrainConfig, TrainPlan
+from swimrl.rl.plan import TrainConfig, TrainPlan, TrainSettings
 
 
 def auto_reward_scale(env: SwimmerEnv, gamma: float) -> float:
@@ -88,14 +88,15 @@ def make_critic(cfg: TrainConfig, env: EnvBase, device, dtype):
 
 
 def make_collector(env: EnvBase, actor, plan: TrainPlan, total_frames: int, device,
-                   compile_policy: bool = False, cudagraph_policy: bool = False) -> Collector:
+                   settings: TrainSettings | None = None) -> Collector:
     """TorchRL ``Collector`` over the batched env; output batches ``(F, S, L)`` (time last).
 
     The env truncates episodes itself after ``N`` decisions; the collector resets the done
     swimmers (partial ``_reset``), so rollouts run across episode boundaries. On CUDA
-    (``train.cudagraphs``) the collector compiles the policy and captures it in a CUDA graph
-    (TorchRL's ``compile_policy`` / ``cudagraph_policy``).
+    (``train.cudagraphs`` in ``settings``) the collector captures the policy in a CUDA graph,
+    compiled first under ``train.compile`` (TorchRL's ``cudagraph_policy`` / ``compile_policy``).
     """
+    graphs = settings is not None and settings.cudagraphs
     return Collector(
         env,
         actor,
@@ -105,8 +106,8 @@ def make_collector(env: EnvBase, actor, plan: TrainPlan, total_frames: int, devi
         storing_device=device,
         auto_register_policy_transforms=False,
         trust_policy=True,
-        compile_policy={"mode": "default"} if compile_policy else None,
-        cudagraph_policy=bool(cudagraph_policy),
+        compile_policy={"mode": "default"} if graphs and settings.compile else None,
+        cudagraph_policy=graphs,
     )
 
 

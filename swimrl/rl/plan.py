@@ -26,7 +26,6 @@ from __future__ import annotations
 from dataclasses import dataclass, replace
 
 import numpy as np
-import torch
 
 from swimrl.env import EnvParams
 from swimrl.errors import as_bool, as_float, as_int, one_of, require
@@ -64,12 +63,12 @@ class TrainSettings:
     eval_swimmers: int
     checkpoint_every: int
     checkpoint_seconds: float
+    cudagraphs: bool  # CUDA graphs of the gradient step, GAE and policy (CUDA only)
+    gae_chunk: int | None  # critic evaluations of the GAE in chunks of this many samples
     stop_after_updates: int | None = None
     progress: bool = True
     compare_baselines: bool = False
     compile: bool = False  # torch.compile of loss + backward (rl.trainer)
-    cudagraphs: bool = False  # CUDA graphs of the gradient step, GAE and policy (CUDA only)
-    gae_chunk: int | None = None  # critic evaluations of the GAE in chunks of this many samples
 
     def __post_init__(self) -> None:
         def k(key: str) -> str:
@@ -177,7 +176,7 @@ class TrainConfig:
         as_bool("resume", self.resume)
         as_bool("overwrite", self.overwrite)
         device = self.evaluation.runtime.device
-        require(not self.train.cudagraphs or torch.device(device).type == "cuda",
+        require(not self.train.cudagraphs or device.type == "cuda",
                 "train.cudagraphs", self.train.cudagraphs,
                 f"false on device={device} (CUDA graphs need device=cuda)")
 

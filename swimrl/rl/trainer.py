@@ -151,6 +151,8 @@ class PPOTrainer:
                 if "step" in state:
                     state["step"] = state["step"].to(
                         self.device if graphs else "cpu", torch.float32)
+        for sch in self.schedulers:  # lr = base_lr * factor, written into the groups above
+            sch.base_lrs = [float(b) for b in sch.base_lrs]
 
     def save_policy(self, path: Path | None = None) -> Path:
         """The deterministic policy as ``<run>/policy.pt`` (or ``path``)."""
@@ -223,14 +225,15 @@ class PPOTrainer:
         """One clipped-PPO gradient step: ``loss_backward`` on a minibatch, the gradient norm of
         actor and critic clipped separately, one Adam step each, gradients released."""
         clip = self.cfg.optim.max_grad_norm
+        groups = [list(self.actor.parameters()), list(self.critic.parameters())]
 
         def step(batch: TensorDict) -> TensorDict:
             with record_function("ppo/loss_backward"):
                 out = loss_backward(batch)
             with record_function("ppo/clip_optimizer"):
                 if clip is not None:
-                    for net in (self.actor, self.critic):
-                        torch.nn.utils.clip_grad_norm_(list(net.parameters()), float(clip))
+                    for g in groups:
+                        torch.nn.utils.clip_grad_norm_(g, float(clip))
                 for opt in self.optimizers:
                     opt.step()
                     opt.zero_grad(set_to_none=True)
@@ -314,9 +317,7 @@ class PPOTrainer:
         if self.counters["updates"] == 0 and plan.eval_every:
             self._periodic_eval()
         collector = rlb.make_collector(
-            self.env, self.actor, plan, n_run * plan.frames_per_batch, self.device,
-            compile_policy=cfg.train.cudagraphs and cfg.train.compile,
-            cudagraph_policy=cfg.train.cudagraphs,
+            self.env, self.actor, plan, n_run * plan.frames_per_batch, self.device, cfg.train
         )
         bar = tqdm(
             total=plan.total_frames,
