@@ -72,7 +72,8 @@ def surrogate_store(path: Path, n: int = 512, n_times: int = 260, seed: int = 0)
     w = DNSStoreWriter.create(path, {"n": n, "length": 2 * math.pi, "dt_store": dt_store,
                                      "u_rms": 1.0, "tau_k": tau_k, "surrogate": True})
     for j in range(n_times):
-        w_hat = torch.from_numpy(w0 * scale * np.exp(1j * freq * j * 0.1)) * n * n
+        # w0 is unnormalised (rfft2 layout, irfft2 above): what append_snapshot takes
+        w_hat = torch.from_numpy(w0 * scale * np.exp(1j * freq * j * 0.1))
         w.append_snapshot(w_hat.to(torch.complex128), j * dt_store)
         if j % 50 == 49:
             w.commit()

@@ -36,7 +36,7 @@ from tensordict import TensorDict, TensorDictBase
 from torchrl.data import Bounded, Categorical, Composite, Unbounded
 from torchrl.envs import EnvBase
 
-from swimrl.errors import ConfigError, as_float
+from swimrl.errors import ConfigError, IntegrityError, as_float
 from swimrl.flows.base import GriddedFlow
 from swimrl.flows.build import FlowSpec, build_flow
 from swimrl.physics.integrator import select_kernel
@@ -146,6 +146,9 @@ class SwimmerEnv(EnvBase):
         self.start_image = torch.zeros_like(self.image)
         self.theta = torch.zeros(batch, device=dev, dtype=dtype)
         self.step_count = torch.zeros(batch, device=dev, dtype=torch.int64)
+        #: Upper bound of ``max_x |u(x, t)|`` of each flow since its last reset, ``(F,)``.
+        self.max_flow_speed = torch.zeros(flow.n_flows, device=dev, dtype=dtype)
+        self._flows = torch.arange(flow.n_flows, device=dev)
         lam = params.shape_factor_max
         self.action_spec = Bounded(low=-lam, high=lam, shape=batch + (1,), device=dev, dtype=dtype)
         self.observation_spec = Composite(
@@ -240,6 +243,7 @@ class SwimmerEnv(EnvBase):
         flows = mask.all(dim=1)
         if flows.any():
             self.flow.reset(flows)
+            self.max_flow_speed[flows] = 0
         k = int(mask.sum())
         if k:
             g, dev, dt = self.generator, self.device, self.pos.dtype
@@ -276,6 +280,8 @@ class SwimmerEnv(EnvBase):
         """Advance all swimmers and flows by one decision interval with ``Lambda`` held fixed."""
         k = self.params.n_substeps
         path = self.flow.coefficient_path(k, self.dt)
+        bound = self.flow.speed_bound(path)[self.flow.rows(self._flows)]
+        torch.maximum(self.max_flow_speed, bound, out=self.max_flow_speed)
         theta = self.theta.view(-1)
         kicks = None
         if self.rot_kick_std > 0:
@@ -299,6 +305,29 @@ class SwimmerEnv(EnvBase):
         self.pos.copy_(pos.view_as(self.pos))
         self.theta.copy_(torch.remainder(theta, 2 * math.pi).view_as(self.theta))
         self._wrap()
+
+    def check_displacement(self, slack: float = 1e-3) -> None:
+        """Refuse a physically impossible state: every swimmer obeys
+        ``|x(t) - x_0| <= (v_s + U_f) t``, with ``t`` its time since its start and ``U_f`` the
+        bound of ``max_x |u|`` of its flow over that time (:attr:`max_flow_speed`), since
+        ``dx/dt = u + v_s n`` and the Heun steps average two such velocities. ``slack``
+        (relative) covers float rounding. Raises :class:`~swimrl.errors.IntegrityError` (one
+        line naming the worst swimmer and the bound) otherwise, NaN included."""
+        t = self.step_count.to(self.pos.dtype) * (self.params.update_interval * self.tau_k)
+        bound = (self.swim_speed + self.max_flow_speed).unsqueeze(1) * t
+        dist = self.displacement().norm(dim=-1)
+        bad = ~(dist <= bound * (1 + slack) + 1e-6 * self.flow.grid.spacing)
+        if bool(bad.any()):
+            excess = torch.where(bad, dist / bound.clamp_min(1e-30), torch.zeros_like(dist))
+            excess = excess.nan_to_num(nan=math.inf)
+            f, s = divmod(int(excess.argmax()), self.n_swimmers)
+            raise IntegrityError(
+                f"impossible result: swimmer {s} of flow {f} is {float(dist[f, s]):.4g} from "
+                f"its start after t = {float(t[f, s]):.4g}, beyond (v_s + max|u|) t = "
+                f"{float(bound[f, s]):.4g} (v_s = {self.swim_speed:.4g}, max|u| <= "
+                f"{float(self.max_flow_speed[f]):.4g}); {int(bad.sum())} swimmers affected, "
+                "nothing written"
+            )
 
     def _set_seed(self, seed: int | None) -> None:
         if seed is None:

@@ -25,6 +25,11 @@ class NonFiniteError(ArithmeticError):
     """A computed value (loss, parameter, result) that is NaN or infinite: nothing is written."""
 
 
+class IntegrityError(RuntimeError):
+    """Stored data that fails its checksum, or a result that is physically impossible (one
+    line naming the file or the quantity and the bound it breaks): nothing is written."""
+
+
 def fail(key: str, value, allowed: str) -> None:
     """Raise ``ConfigError("KEY=VALUE is invalid: allowed RANGE")``."""
     raise ConfigError(f"{key}={value!r} is invalid: allowed {allowed}")

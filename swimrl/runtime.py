@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import os
 from dataclasses import dataclass
+from pathlib import Path
 
 import torch
 
@@ -24,6 +25,41 @@ def resolve_device(device: str) -> torch.device:
     if dev.type == "cuda" and not torch.cuda.is_available():
         raise ConfigError(f"device={device!r} is invalid: CUDA is not available on this machine")
     return dev
+
+
+def available_memory(device: torch.device) -> int:
+    """Bytes a new allocation can use: the GPU's free memory for ``cuda``; for the CPU the
+    kernel's ``MemAvailable``, capped by the cgroup limit (``memory.max - memory.current``)
+    when the process runs under one (a container, a Slurm job)."""
+    if device.type == "cuda":
+        return int(torch.cuda.mem_get_info(device)[0])
+    avail = os.sysconf("SC_AVPHYS_PAGES") * os.sysconf("SC_PAGE_SIZE")
+    try:
+        meminfo = Path("/proc/meminfo").read_text().split("\n")
+        line = next(x for x in meminfo if x.startswith("MemAvailable:"))
+        avail = int(line.split()[1]) * 1024
+    except (OSError, StopIteration, ValueError):
+        pass
+    try:
+        limit = Path("/sys/fs/cgroup/memory.max").read_text().strip()
+        used = int(Path("/sys/fs/cgroup/memory.current").read_text().strip())
+        if limit != "max":
+            avail = min(avail, int(limit) - used)
+    except (OSError, ValueError):
+        pass
+    return int(avail)
+
+
+def check_memory(need: int, device: torch.device, key: str, value, what: str) -> None:
+    """One-line :class:`~swimrl.errors.ConfigError` naming ``key`` when ``need`` bytes
+    (``what``: how they were counted) exceed :func:`available_memory` of ``device``."""
+    have = available_memory(device)
+    if need > have:
+        raise ConfigError(
+            f"{key}={value!r} is invalid: allowed a value whose memory fits this machine: "
+            f"{what} need ~{need / 2**30:.1f} GiB, {have / 2**30:.1f} GiB available on "
+            f"{device.type}; lower {key}"
+        )
 
 
 @dataclass(frozen=True)

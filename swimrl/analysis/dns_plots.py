@@ -38,7 +38,6 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 import torch  # noqa: E402
-import zarr  # noqa: E402
 
 from swimrl.flows.dns import diagnostics as dg  # noqa: E402
 from swimrl.flows.dns.grid import SpectralGrid  # noqa: E402
@@ -184,17 +183,16 @@ def plot_pdfs(samples: dict[str, np.ndarray], out: Path) -> dict[str, dict[str, 
 
 
 def plot_timeseries(path: Path, store: DNSStore, out: Path) -> None:
-    """Energy/enstrophy and their rates from the ``diagnostics`` group."""
-    d = zarr.open_group(str(path), mode="r")["diagnostics"]
-    n = int(store.attrs.get("n_diag", d["t"].shape[0]))
-    t = np.asarray(d["t"][:n])
+    """Energy/enstrophy and their rates from the ``diagnostics`` group (checksums checked)."""
+    d = store.diagnostics()
+    t = d["t"]
     fig, axs = plt.subplots(1, 2, figsize=(10, 3.6))
-    axs[0].plot(t, np.asarray(d["energy"][:n]), label=r"$E$")
-    axs[0].plot(t, np.asarray(d["enstrophy"][:n]) / 10, label=r"$Z/10$")
-    axs[1].plot(t, np.asarray(d["energy_friction"][:n]), label=r"$F_E$ (hypo-friction)")
-    axs[1].plot(t, np.asarray(d["energy_dissipation"][:n]), label=r"$D_E$ (viscous)")
-    axs[1].plot(t, np.asarray(d["enstrophy_dissipation"][:n]) / 10, label=r"$D_Z/10$")
-    axs[1].plot(t, np.asarray(d["enstrophy_friction"][:n]) / 10, label=r"$F_Z/10$")
+    axs[0].plot(t, d["energy"], label=r"$E$")
+    axs[0].plot(t, d["enstrophy"] / 10, label=r"$Z/10$")
+    axs[1].plot(t, d["energy_friction"], label=r"$F_E$ (hypo-friction)")
+    axs[1].plot(t, d["energy_dissipation"], label=r"$D_E$ (viscous)")
+    axs[1].plot(t, d["enstrophy_dissipation"] / 10, label=r"$D_Z/10$")
+    axs[1].plot(t, d["enstrophy_friction"] / 10, label=r"$F_Z/10$")
     eps = float(store.attrs["epsilon"])
     axs[1].axhline(eps, color="k", ls="--", lw=0.8, label=r"$\epsilon$")
     t0 = store.attrs.get("t_first")
@@ -264,13 +262,12 @@ def _plots_and_samples(path: str | Path, out_dir: str | Path, n_snapshots: int,
 def stored_window_series(path: Path, store: DNSStore) -> dict[str, np.ndarray]:
     """``t / tau_K`` from the first stored snapshot, ``u_rms(t) = (2E)^{1/2}`` and
     ``tau_K(t) = (2Z)^{-1/2}`` (2D: ``<A_ij A_ij> = <omega^2> = 2Z``) over the stored
-    window, from the run's diagnostics."""
-    d = zarr.open_group(str(path), mode="r")["diagnostics"]
-    n = int(store.attrs.get("n_diag", d["t"].shape[0]))
-    t = np.asarray(d["t"][:n])
-    t0 = float(store.attrs.get("t_first", t[0] if n else 0.0))
+    window, from the run's diagnostics (checksums checked)."""
+    d = store.diagnostics(("t", "energy", "enstrophy"))
+    t = d["t"]
+    t0 = float(store.attrs.get("t_first", t[0] if len(t) else 0.0))
     keep = t >= t0
-    e, z = np.asarray(d["energy"][:n])[keep], np.asarray(d["enstrophy"][:n])[keep]
+    e, z = d["energy"][keep], d["enstrophy"][keep]
     return {"t": (t[keep] - t0) / store.tau_k, "u_rms": np.sqrt(2 * e), "tau_k": (2 * z) ** -0.5}
 
 

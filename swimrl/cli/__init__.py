@@ -31,7 +31,7 @@ from hydra.core.hydra_config import HydraConfig
 from hydra.experimental.callback import Callback
 from omegaconf import DictConfig, OmegaConf
 
-from swimrl.errors import BadFileError, ConfigError, NonFiniteError
+from swimrl.errors import BadFileError, ConfigError, IntegrityError, NonFiniteError
 
 #: The configs shipped with the package (the repository's top-level ``conf/``).
 CONFIG_PATH = "pkg://swimrl.conf"
@@ -41,6 +41,21 @@ RESULT_FILES = ("metrics.json", "comparison.json", "fit.json", "gain_scan.json")
 #: ``check(cfg, out)`` of each Hydra config name; ``out`` is the run directory, or None in a
 #: multirun (the job directories are not known yet).
 CHECKS: dict[str, Callable[[DictConfig, Path | None], object]] = {}
+
+
+def writable_dir(path: Path) -> Path:
+    """Create the directory ``path`` (with its parents) and check that a file can be written
+    in it; :class:`~swimrl.errors.BadFileError` with the system's reason otherwise."""
+    path = Path(path)
+    probe = path / f".swimrl-write-probe-{os.getpid()}"
+    try:
+        path.mkdir(parents=True, exist_ok=True)
+        probe.write_bytes(b"")
+        probe.unlink()
+    except OSError as err:
+        raise BadFileError(f"{err.strerror or type(err).__name__}: "
+                           f"{err.filename or path}") from err
+    return path
 
 
 def run_dir() -> Path:
@@ -57,8 +72,9 @@ def usage_error(err: BaseException, status: int = 2) -> None:
 
 
 def one_line_errors(task: Callable) -> Callable:
-    """Print a usage error as ``error: MESSAGE`` and exit with status 2; a non-finite result
-    (:class:`~swimrl.errors.NonFiniteError`, nothing written) the same way with status 1."""
+    """Print a usage error as ``error: MESSAGE`` and exit with status 2; a non-finite or
+    impossible result or corrupt stored data (:class:`~swimrl.errors.NonFiniteError`,
+    :class:`~swimrl.errors.IntegrityError`; nothing written) the same way with status 1."""
 
     @functools.wraps(task)
     def wrapped(*args, **kwargs):
@@ -66,7 +82,7 @@ def one_line_errors(task: Callable) -> Callable:
             return task(*args, **kwargs)
         except USAGE_ERRORS as err:
             usage_error(err)
-        except NonFiniteError as err:
+        except (NonFiniteError, IntegrityError) as err:
             usage_error(err, status=1)
 
     return wrapped
@@ -86,11 +102,24 @@ class CheckFirst(Callback):
     """Hydra callback: the command's check (:data:`CHECKS`) before any directory is made."""
 
     def on_run_start(self, config: DictConfig, config_name: str | None = None, **kwargs) -> None:
-        self._check(config, config_name, Path(str(config.hydra.run.dir)))
+        out = Path(str(config.hydra.run.dir))
+        self._check(config, config_name, out)
+        self._writable("hydra.run.dir", out)
 
     def on_multirun_start(self, config: DictConfig, config_name: str | None = None,
                           **kwargs) -> None:
         self._check(config, config_name, None)
+        self._writable("hydra.sweep.dir", Path(str(config.hydra.sweep.dir)))
+
+    @staticmethod
+    def _writable(key: str, out: Path) -> None:
+        """One line, exit 2, unless the run directory ``out`` can be created and written
+        (Hydra creates it next; a probe file is written and removed)."""
+        try:
+            writable_dir(out)
+        except BadFileError as err:
+            usage_error(ConfigError(f"{key}={str(out)!r} is invalid: allowed a directory "
+                                    f"that can be created and written ({err})"))
 
     @staticmethod
     def _check(config: DictConfig, config_name: str | None, out: Path | None) -> None:

@@ -12,7 +12,10 @@ An interrupted comparison continues with the same command (the same run director
 ``hydra.run.dir=...``, or the sweep's) plus ``compare.resume=true``:
 ``comparison.partial.json`` in the run directory holds the flow chunks already done, and a
 finished comparison is left as it is (so a relaunched multirun only completes what is
-missing).
+missing). On ``SIGTERM`` or ``SIGUSR1`` (a scheduler's preemption or time-limit warning) the
+comparison stops after the chunk in flight, with the partial record written, and exits with
+status 75 (:data:`swimrl.evaluation.jobs.PREEMPTED_EXIT`); one process at a time works in a
+run directory (its ``.lock``).
 """
 
 from __future__ import annotations
@@ -28,35 +31,43 @@ from swimrl.cli import command, run_dir
 from swimrl.config import compare_config
 from swimrl.errors import ConfigError
 from swimrl.evaluation.compare import PARTIAL, CompareConfig, compare
+from swimrl.evaluation.jobs import preemption_signals, refuse_if_locked, run_lock
 from swimrl.evaluation.records import refuse_overwrite, write_comparison
+from swimrl.evaluation.rollout import check_eval_memory
 
 log = logging.getLogger(__name__)
 
 
 def check(cfg: DictConfig, out: Path | None) -> CompareConfig:
-    """Parse and check the config; refuse to replace a result or to drop an unfinished one."""
+    """Parse and check the config; refuse a run directory held by another process, and to
+    replace a result or to drop an unfinished one."""
     c = compare_config(cfg)
     if out is not None:
+        refuse_if_locked(out)
         refuse_overwrite(out / "comparison.json", c.overwrite or c.resume)
         if (out / PARTIAL).exists() and not (c.resume or c.overwrite):
             raise ConfigError(f"compare.resume=false but {out / PARTIAL} holds an unfinished "
                               "comparison: allowed compare.resume=true (continue it) or "
                               "overwrite=true (start again)")
+    check_eval_memory(c.setup, len(c.variants) if c.shared_flows else 1)
     return c
 
 
 def _main(cfg: DictConfig) -> dict:
     out = run_dir()
-    c = check(cfg, out)
-    if c.resume and not c.overwrite and (out / "comparison.json").exists():
-        log.info("compare.resume=true: %s is complete, nothing to do", out / "comparison.json")
-        return json.loads((out / "comparison.json").read_text())
-    record = compare(c, out / PARTIAL)
-    print(write_comparison(record, out), flush=True)
-    (out / PARTIAL).unlink(missing_ok=True)
-    plot_naive_scan(record, out / "naive_scan.png")
-    log.info("wrote %s", out / "comparison.json")
-    return record
+    with run_lock(out, "swimrl-compare"):
+        c = check(cfg, out)  # again, holding the lock
+        if c.resume and not c.overwrite and (out / "comparison.json").exists():
+            log.info("compare.resume=true: %s is complete, nothing to do",
+                     out / "comparison.json")
+            return json.loads((out / "comparison.json").read_text())
+        with preemption_signals() as preemption:
+            record = compare(c, out / PARTIAL, preemption)
+        print(write_comparison(record, out), flush=True)
+        (out / PARTIAL).unlink(missing_ok=True)
+        plot_naive_scan(record, out / "naive_scan.png")
+        log.info("wrote %s", out / "comparison.json")
+        return record
 
 
 @command("compare", check=check)

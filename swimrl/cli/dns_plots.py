@@ -10,6 +10,7 @@ from pathlib import Path
 import torch
 
 from swimrl.analysis.dns_plots import check_stores, make_plots
+from swimrl.cli import one_line_errors
 
 
 def run(argv: list[str] | None = None) -> dict:
@@ -45,8 +46,11 @@ def run(argv: list[str] | None = None) -> dict:
     return summary
 
 
+@one_line_errors
 def main(argv: list[str] | None = None) -> int:
-    """The console entry: :func:`run`, exit status 0 (its summary is printed, not returned)."""
+    """The console entry: :func:`run`, exit status 0 (its summary is printed, not returned);
+    a missing store is one ``error:`` line with status 2, a corrupt one (a damaged chunk, an
+    impossible snapshot) with status 1."""
     run(argv)
     return 0
 

@@ -15,8 +15,9 @@ from omegaconf import DictConfig
 
 from swimrl.cli import command, run_dir
 from swimrl.config import eval_config
+from swimrl.evaluation.jobs import refuse_if_locked, run_lock
 from swimrl.evaluation.records import refuse_overwrite, summary_line, write_json
-from swimrl.evaluation.rollout import Actor, EvalConfig, actor_for, evaluate
+from swimrl.evaluation.rollout import Actor, EvalConfig, actor_for, check_eval_memory, evaluate
 from swimrl.evaluation.trajectories import TRAJECTORY_FILE, TrajectoryRecorder, save_trajectories
 
 log = logging.getLogger(__name__)
@@ -26,22 +27,25 @@ def check(cfg: DictConfig, out: Path | None) -> tuple[EvalConfig, Actor]:
     """Parse and check the config, refuse to replace a result, load the actor."""
     c = eval_config(cfg)
     if out is not None:
+        refuse_if_locked(out)
         refuse_overwrite(out / "metrics.json", c.overwrite)
+    check_eval_memory(c.setup)
     return c, actor_for(c.strategy, c.policy, c.setup.params)
 
 
 @command("evaluate", check=check)
 def main(cfg: DictConfig) -> dict:
     target = run_dir() / "metrics.json"
-    c, actor = check(cfg, run_dir())
-    n_record = c.setup.sizes.record
-    recorder = TrajectoryRecorder(n_record) if n_record else None
-    metrics = evaluate(c.setup, actor, c.strategy.name, recorder)
-    if recorder is not None:
-        path = save_trajectories(recorder.arrays(), run_dir() / TRAJECTORY_FILE,
-                                 [c.strategy.name], c.setup.record)
-        log.info("wrote %s", path)
-    write_json(metrics, target, c.overwrite)
+    with run_lock(run_dir(), "swimrl-eval"):  # one process per run directory
+        c, actor = check(cfg, run_dir())
+        n_record = c.setup.sizes.record
+        recorder = TrajectoryRecorder(n_record) if n_record else None
+        metrics = evaluate(c.setup, actor, c.strategy.name, recorder)
+        if recorder is not None:
+            path = save_trajectories(recorder.arrays(), run_dir() / TRAJECTORY_FILE,
+                                     [c.strategy.name], c.setup.record)
+            log.info("wrote %s", path)
+        write_json(metrics, target, c.overwrite)
     print(summary_line(metrics))
     log.info("wrote %s", target)
     return metrics

@@ -13,7 +13,8 @@ of ``eval.flows_per_batch`` flows the results so far go to ``comparison.partial.
 final record is the uninterrupted one's (chunk ``c`` depends only on ``(seed, c)``). The
 partial file names what it was computed for (the resolved config without the keys that do
 not change results, the rows and a digest of every policy's parameters); a resume that
-differs is refused.
+differs is refused. A preemption signal stops it after the chunk in flight
+(:mod:`.jobs`).
 """
 
 from __future__ import annotations
@@ -30,6 +31,7 @@ import torch
 from swimrl.errors import BadFileError, ConfigError
 from swimrl.policies.baselines import STRATEGIES, StrategySpec
 
+from .jobs import Preemption
 from .records import summary_line, write_json
 from .rollout import Actor, EvalSetup, actor_for, check_chunks, evaluate_shared, flow_chunks
 from .statistics import paired_ratio
@@ -156,10 +158,14 @@ def _first_difference(a: object, b: object, key: str = "") -> str:
     return f"{key or 'identity'}: saved {a!r}, now {b!r}"
 
 
-def compare(cfg: CompareConfig, partial: Path | None = None) -> dict:
+def compare(cfg: CompareConfig, partial: Path | None = None,
+            preemption: Preemption | None = None) -> dict:
     """Evaluate all variants (every policy loaded first) and return the comparison record;
     with ``partial`` (a :data:`PARTIAL` path) the chunk results are saved there as they come
-    and, with ``cfg.resume``, the ones already there are reused."""
+    and, with ``cfg.resume``, the ones already there are reused. A ``preemption`` requested
+    (a signal, :mod:`.jobs`) stops the comparison after the chunk in flight, once ``partial``
+    holds it (:meth:`~.jobs.Preemption.stop`: exit status :data:`~.jobs.PREEMPTED_EXIT`),
+    unless no chunk is left to do."""
     setup = cfg.setup
     actors = [actor_for(v.strategy, v.policy, setup.params) for v in cfg.variants]
     n = len(actors)
@@ -181,11 +187,25 @@ def compare(cfg: CompareConfig, partial: Path | None = None) -> dict:
     elif partial is not None and cfg.resume:
         print(f"compare.resume=true: no {partial}, starting from the first chunk", flush=True)
     results: list[dict] = [{} for _ in range(n)]
+    n_chunks = len(flow_chunks(setup.sizes))
+
+    def stop_if_preempted() -> None:
+        """Once preempted: the partial record (re)written, then stop, unless all is done."""
+        left = sum(n_chunks - len(done) for done in state["done"])
+        if partial is not None and preemption is not None and preemption.requested and left:
+            write_json(state, partial)
+            preemption.stop(f"with {left} flow chunk(s) of {n_chunks * len(groups)} left: "
+                            f"partial record written to {partial}; continue with "
+                            "compare.resume=true")
+
     for g, done in zip(groups, state["done"], strict=True):
 
         def keep(chunk: dict, done: list = done) -> None:
             done.append(chunk)
             write_json(state, partial)
+            stop_if_preempted()
+
+        stop_if_preempted()
 
         labels = [cfg.variants[i].label for i in g]
         metrics = evaluate_shared(setup, [actors[i] for i in g], desc=" + ".join(labels),

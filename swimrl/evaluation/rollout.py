@@ -29,11 +29,11 @@ from tqdm.auto import tqdm
 
 from swimrl.env import EnvParams, SwimmerEnv
 from swimrl.errors import ConfigError, as_int, require
-from swimrl.flows.build import FlowSpec, StoredRunSpec
+from swimrl.flows.build import FLOW_WORK_BYTES, FlowSpec, StoredRunSpec, flow_table_bytes
 from swimrl.flows.dns.store import store_record
 from swimrl.policies.baselines import StrategySpec, build_strategy
 from swimrl.policies.files import load_policy
-from swimrl.runtime import Runtime
+from swimrl.runtime import Runtime, check_memory
 
 from .statistics import flow_statistics, mean_flow_stats
 from .trajectories import TrajectoryRecorder
@@ -96,6 +96,25 @@ class EvalConfig:
                 "pretrained/NAME>"
             )
         self.strategy.check_bound(self.setup.params.shape_factor_max)
+
+
+#: Bytes per swimmer of state, observations and integration temporaries (an upper estimate).
+SWIMMER_BYTES = 512
+
+
+def check_eval_memory(setup: EvalSetup, n_strategies: int = 1) -> None:
+    """Refuse (one line naming ``eval.flows_per_batch``) a chunk of ``flows_per_batch`` flows,
+    ``n_strategies x n_swimmers`` swimmers each, whose flow tables, swimmers and work memory
+    (:func:`~swimrl.flows.build.flow_table_bytes`, :data:`SWIMMER_BYTES`,
+    :data:`~swimrl.flows.build.FLOW_WORK_BYTES`) exceed the device's available memory."""
+    sizes, dtype = setup.sizes, setup.runtime.dtype
+    flows = min(sizes.flows_per_batch, sizes.n_flows)
+    table = flow_table_bytes(setup.flow, flows, dtype, setup.params.update_interval)
+    swimmers = flows * n_strategies * sizes.n_swimmers * SWIMMER_BYTES
+    check_memory(table + swimmers + FLOW_WORK_BYTES, setup.runtime.device,
+                 "eval.flows_per_batch", sizes.flows_per_batch,
+                 f"the flow tables of {flows} flows ({table / 2**30:.1f} GiB), "
+                 f"{flows * n_strategies * sizes.n_swimmers} swimmers and work memory")
 
 
 def chunk_seed(seed: int, chunk: int) -> int:
@@ -207,6 +226,7 @@ def evaluate_shared(setup: EvalSetup, actors: Sequence[Actor], desc: str = "eval
         if recorder is not None:
             recorder.start(env, s, k)
         r_hat = run_episodes(env, router, bar, on_decision=recorder).double()
+        env.check_displacement()
         if recorder is not None:
             recorder.finish(r_hat)
         chunk_s = time.perf_counter() - t0

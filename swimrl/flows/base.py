@@ -45,6 +45,12 @@ def field_stats(q: torch.Tensor, weights: torch.Tensor | None = None) -> dict[st
             "tau_K": (w * a2.mean((1, 2))).sum().item() ** -0.5}
 
 
+def max_speed(q: torch.Tensor) -> torch.Tensor:
+    """``max_x |u(x)| = max_j (u_x^2 + u_y^2)^{1/2}`` over the nodes of channels ``q``
+    ``(..., n, n, M, 5)``: ``(..., M)``, one value per basis field."""
+    return (q[..., 0] ** 2 + q[..., 1] ** 2).amax(dim=(-3, -2)).sqrt()
+
+
 class GriddedFlow:
     """Base class: ``n_flows`` independent realisations of ``q(x,t) = sum_m c_m(t) Q_m(x)``.
 
@@ -71,6 +77,9 @@ class GriddedFlow:
         self.basis = torch.zeros(rows, n, n, n_basis, N_CHANNELS, device=self.device, dtype=dtype)
         self.coeffs = torch.zeros(rows, n_basis, device=self.device, dtype=dtype)
         self.time = torch.zeros(n_flows, device=self.device, dtype=torch.float64)
+        #: ``max_x |u|`` of each basis field, ``(R, M)``: kept current by the subclasses
+        #: (:meth:`refresh_mode_speed` after they write :attr:`basis`) for :meth:`speed_bound`.
+        self.mode_speed = torch.zeros(rows, n_basis, device=self.device, dtype=dtype)
 
     # -- interface for subclasses -------------------------------------------------------------
     def advance(self, dt: float) -> None:  # pragma: no cover - abstract
@@ -97,6 +106,23 @@ class GriddedFlow:
             self.advance(dt)
             path.append(self.coeffs.clone())
         return torch.stack(path)
+
+    def refresh_mode_speed(self, rows: torch.Tensor | None = None) -> None:
+        """Recompute :attr:`mode_speed` of the basis ``rows`` (all if None), a row at a time."""
+        rows = range(self.basis.shape[0]) if rows is None else rows.reshape(-1).tolist()
+        for r in rows:
+            self.mode_speed[r] = max_speed(self.basis[r])
+
+    def speed_bound(self, path: torch.Tensor) -> torch.Tensor:
+        """Upper bound of the flow speed over the times of a coefficient ``path``
+        ``(K, R, M)``, per basis row ``(R,)``:
+
+        ``max_{x,k} |u(x, t_k)| <= max_k sum_m |c_m(t_k)| max_x |Q_m(x)|``,
+
+        exact for the sampled flow too, since bilinear interpolation is a convex combination
+        of node values.
+        """
+        return (path.abs() * self.mode_speed).sum(-1).amax(0)
 
     # -- sampling -----------------------------------------------------------------------------
     @property

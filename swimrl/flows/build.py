@@ -19,7 +19,7 @@ from swimrl.flows.base import GriddedFlow
 from swimrl.flows.dns.params import DNSParams
 from swimrl.flows.dns.spinup import SpinupSchedule
 from swimrl.flows.dns.store import store_status
-from swimrl.flows.replay import ReplayFlow
+from swimrl.flows.replay import ReplayFlow, window_size
 from swimrl.flows.sources import DNSStore, LiveDNS, StoreSet
 from swimrl.flows.stochastic import (
     AMPLITUDE_MODES,
@@ -132,6 +132,29 @@ def live_dns_params(solver: dict, device: torch.device, dtype: torch.dtype) -> D
         return DNSParams.from_mapping(
             {**solver, "device": str(device), "dtype": str(dtype).replace("torch.", "")}
         )
+
+
+#: Work memory a flow may use beyond its basis table while drawing or decoding (the stochastic
+#: synthesis works on at most 2^22 float64 nodes at a time; a snapshot decode on a few grids).
+FLOW_WORK_BYTES = 2**29
+
+
+def flow_table_bytes(spec: FlowSpec, n_flows: int, dtype: torch.dtype, interval: float) -> int:
+    """Bytes the basis of ``n_flows`` realisations of ``spec`` holds: ``R n^2 M 5`` values
+    (``R`` basis rows, ``n^2`` nodes, ``M`` basis fields, 5 channels), plus a decoded-snapshot
+    cache of ``M + 1`` snapshots for stored runs and the solver state (``~12 n^2`` complex128)
+    of every live DNS; ``interval`` is ``T_u`` in units of ``tau_K`` (sets a replay's ``M``)."""
+    size = torch.empty((), dtype=dtype).element_size()
+    if isinstance(spec, StochasticSpec):
+        return n_flows * spec.n_grid**2 * spec.n_modes * 5 * size
+    if isinstance(spec, LiveDNSSpec):
+        n = spec.dns.n
+        window = window_size(interval, spec.interval_tau_k)
+        return n_flows * n * n * (window * 5 * size + 12 * 16)
+    store = DNSStore(Path(spec.path), decode_n=spec.decode_n)
+    window = window_size(interval * store.tau_k, store.dt_store)
+    rows = -(-n_flows // spec.flows_per_start)
+    return (rows + 1) * store.n**2 * window * 5 * size + store.n**2 * 5 * size
 
 
 def build_flow(

@@ -37,7 +37,7 @@ from typing import Protocol
 
 import torch
 
-from swimrl.flows.base import GriddedFlow, field_stats
+from swimrl.flows.base import GriddedFlow, field_stats, max_speed
 from swimrl.flows.grid import PeriodicGrid
 
 
@@ -184,6 +184,7 @@ class ReplayFlow(GriddedFlow):
             return int(free[0])
         self.basis = torch.cat([self.basis, torch.zeros_like(self.basis[:1])])
         self.coeffs = torch.cat([self.coeffs, torch.zeros_like(self.coeffs[:1])])
+        self.mode_speed = torch.cat([self.mode_speed, torch.zeros_like(self.mode_speed[:1])])
         self.row_run = torch.cat([self.row_run, self.row_run[:1]])
         self.row_start = torch.cat([self.row_start, self.row_start[:1]])
         self.row_time = torch.cat([self.row_time, self.row_time[:1]])
@@ -219,7 +220,8 @@ class ReplayFlow(GriddedFlow):
             for j in range(j0, j0 + m if end is None else min(j0 + m, end)):
                 slot = j % m
                 if int(self.held[r, slot]) != j:
-                    self.basis[r, :, :, slot] = self.snapshot(run, j)
+                    self.basis[r, :, :, slot] = q = self.snapshot(run, j)
+                    self.mode_speed[r, slot] = max_speed(q.unsqueeze(-2))[0]
                     self.held[r, slot] = j
 
     def _weights(self, times: torch.Tensor, rows: torch.Tensor) -> torch.Tensor:

@@ -11,7 +11,10 @@ swimmers' parameters are expressed.
   the retained modes ``|m_x|, |m_y| <= K`` with ``K <= n_d/2 - 1`` are kept exactly, so for
   ``n_d > 2K`` the decoded nodes sample the same band-limited field, and only the bilinear
   interpolation between nodes (error ``~ h^2``) differs; smaller ``n_d`` also truncates
-  ``K`` (docs/dns.md has the measured errors).
+  ``K`` (docs/dns.md has the measured errors). Every read passes the chunks' crc32c checksums
+  and every snapshot read is finite with an rms velocity within a factor 5 of the run's
+  ``u_rms`` (:mod:`swimrl.flows.dns.integrity`), else :class:`~swimrl.errors.IntegrityError`;
+  a store written before checksums reads unverified, with one warning line.
 * :class:`StoreSet` is several stored runs (independent realisations, e.g. seeds) replayed
   as one source: ``channels(i0, i1, run)`` reads run ``run``.
 * :class:`LiveDNS` (``flow=dns``) is a batch of ``F`` independent DNS realisations, one per
@@ -25,6 +28,7 @@ swimmers' parameters are expressed.
 
 from __future__ import annotations
 
+import logging
 import math
 from pathlib import Path
 from typing import Any
@@ -36,15 +40,28 @@ import zarr
 from swimrl.flows.base import CHANNELS
 from swimrl.flows.dns import DNS, DNSParams, flow_channels
 from swimrl.flows.dns.grid import SpectralGrid, dealias_cutoff
+from swimrl.flows.dns.integrity import (
+    SnapshotCheck,
+    has_checksum,
+    read,
+    read_snapshots,
+    verify_hint,
+)
 from swimrl.flows.dns.spinup import SpinupSchedule, spin_up
 from swimrl.flows.dns.store import unpack
+
+log = logging.getLogger(__name__)
+#: stores already reported as unverified in this process (one warning line per store)
+_UNVERIFIED_REPORTED: set[Path] = set()
 
 
 class DNSStore:
     """Reader of a run stored by ``swimrl-dns`` (:mod:`swimrl.flows.dns.store`).
 
     ``DNSStore(path)`` exposes ``n_times``, ``dt_store``, ``u_rms``, ``tau_k``, ``length``,
-    ``n``, ``times``, ``attrs`` and :meth:`channels`.
+    ``n``, ``times``, ``attrs``, ``checksums`` and :meth:`channels`. Reads are checked
+    (module docstring): a damaged chunk or an impossible snapshot is an
+    :class:`~swimrl.errors.IntegrityError` naming the store and the time index.
     """
 
     n_runs = 1
@@ -71,6 +88,12 @@ class DNSStore:
         self.channel_names = tuple(self.attrs.get("channel_names", CHANNELS))
         self._grid = SpectralGrid(self.n, self.length, self.device, torch.float32)
         self.cutoff = min(dealias_cutoff(self.store_n), self.n // 2 - 1)  # modes decoded
+        self.check = SnapshotCheck(self.store_n, self.length, self.u_rms, self.path)
+        self.checksums = has_checksum(self.group["omega_hat"])
+        if not self.checksums and self.path.resolve() not in _UNVERIFIED_REPORTED:
+            _UNVERIFIED_REPORTED.add(self.path.resolve())
+            log.warning("%s is unverified (no checksums: written before swimrl stored them); "
+                        "check it with %s", self.path, verify_hint(self.path))
 
     @property
     def complete(self) -> bool:
@@ -80,7 +103,7 @@ class DNSStore:
     @property
     def times(self) -> np.ndarray:
         """Snapshot times ``(n_times,)``."""
-        return np.asarray(self.group["time"][: self.n_times])
+        return read(self.group["time"], self.path, "time", slice(0, self.n_times))
 
     def _check_range(self, i0: int, i1: int) -> None:
         if not 0 <= i0 <= i1 <= self.n_times:
@@ -100,9 +123,22 @@ class DNSStore:
         return unpack(c.to(torch.complex64) * float(self.n) ** 2, self.n, cutoff=k)
 
     def _stored(self, i0: int, i1: int) -> torch.Tensor:
-        """The stored (packed, normalised) coefficients of snapshots ``i0..i1-1``."""
+        """The stored (packed, normalised) coefficients of snapshots ``i0..i1-1``, checked:
+        their chunks' checksums, finite, rms velocity within a factor ``RMS_FACTOR = 5`` of
+        ``u_rms`` (:class:`~swimrl.flows.dns.integrity.SnapshotCheck`)."""
         self._check_range(i0, i1)
-        return torch.from_numpy(np.asarray(self.group["omega_hat"][i0:i1])).to(self.device)
+        c = read_snapshots(self.group["omega_hat"], self.path, i0, i1)
+        c = torch.from_numpy(c).to(self.device)
+        self.check.check(c, i0)
+        return c
+
+    def diagnostics(self, names: tuple[str, ...] | None = None) -> dict[str, np.ndarray]:
+        """The committed diagnostics series (``t``, ``energy``, ...; all if ``names`` is
+        None), checksums checked."""
+        d = self.group["diagnostics"]
+        n = int(self.attrs.get("n_diag", d["t"].shape[0]))
+        names = tuple(d.array_keys()) if names is None else names
+        return {k: read(d[k], self.path, f"diagnostics/{k}", slice(0, n)) for k in names}
 
     def channels(self, i0: int, i1: int, run: int = 0) -> torch.Tensor:
         """``(u_x, u_y, S_xx, S_xy, omega)`` at the decode nodes, ``(i1-i0, n_d, n_d, 5)``

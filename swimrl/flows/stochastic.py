@@ -288,6 +288,7 @@ class StochasticFlow(GriddedFlow):
                 self.basis[idx] = self.draw_components(count)
         else:
             self.basis[idx] = self.fixed_basis
+        self.refresh_mode_speed(idx)
         xi = self._randn(idx.numel(), self.n_basis)
         if self.amplitudes == "stationary":
             self.coeffs[idx] = xi / math.sqrt(self.n_basis)

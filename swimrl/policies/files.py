@@ -76,8 +76,9 @@ def atomic_save(obj, path: Path) -> Path:
 def load_file(path: Path, map_location="cpu") -> dict:
     """Load a checkpoint or policy file (tensors and plain containers only: ``weights_only``).
 
-    A file that is truncated, corrupt, not a torch file or not a swimrl-train file raises
-    :class:`~swimrl.errors.BadFileError` naming its path.
+    A file that is truncated, corrupt, not a torch file or not a swimrl-train file, or whose
+    actor or critic weights are not all finite, raises :class:`~swimrl.errors.BadFileError`
+    naming its path.
     """
     path = Path(path)
     try:
@@ -90,6 +91,14 @@ def load_file(path: Path, map_location="cpu") -> dict:
                            f"(truncated, corrupt or another kind of file: {reason})") from err
     if not isinstance(data, dict) or data.get("format") not in (CHECKPOINT_FORMAT, POLICY_FORMAT):
         raise BadFileError(f"{path} is not a swimrl-train policy or checkpoint")
+    for part in ("actor", "critic"):
+        for name, value in (data.get(part) or {}).items():
+            if torch.is_tensor(value) and value.is_floating_point() and not bool(
+                    torch.isfinite(value).all()):
+                raise BadFileError(
+                    f"{path} holds non-finite weights ({part} {name}: "
+                    f"{int((~torch.isfinite(value)).sum())} of {value.numel()} NaN or inf): "
+                    "refusing to use it")
     return data
 
 

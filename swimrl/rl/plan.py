@@ -29,10 +29,10 @@ import numpy as np
 
 from swimrl.env import EnvParams
 from swimrl.errors import as_bool, as_float, as_int, one_of, require
-from swimrl.evaluation.rollout import EvalSetup
-from swimrl.flows.build import FlowSpec
+from swimrl.evaluation.rollout import SWIMMER_BYTES, EvalSetup
+from swimrl.flows.build import FLOW_WORK_BYTES, FlowSpec, flow_table_bytes
 from swimrl.policies.networks import ModelSpec
-from swimrl.runtime import Runtime
+from swimrl.runtime import Runtime, check_memory
 
 #: Offset added to ``seed`` for the held-out evaluation flows.
 EVAL_SEED_OFFSET = 1_000_000
@@ -251,3 +251,30 @@ def make_plan(cfg: TrainConfig) -> TrainPlan:
         eval_seed=int(cfg.seed) + EVAL_SEED_OFFSET,
         train_seed=training_seed(int(cfg.seed)),
     )
+
+
+#: Bytes per frame of a rollout batch (observations, signals, actions, log-probabilities,
+#: values, advantages, their ``next`` copies and the loss's temporaries; an upper estimate).
+FRAME_BYTES = 1024
+
+
+def check_train_memory(cfg: TrainConfig, plan: TrainPlan) -> None:
+    """Refuse (one line naming the key of the largest part) a run whose training flows and
+    swimmers, rollout batch (:data:`FRAME_BYTES` per frame) and held-out evaluation chunk
+    exceed the device's available memory (:func:`~swimrl.runtime.check_memory`)."""
+    dtype, interval = cfg.runtime.dtype, cfg.params.update_interval
+    held = cfg.held_out
+    eval_flows = min(held.sizes.flows_per_batch, held.sizes.n_flows)
+    parts = {
+        "train.n_flows": flow_table_bytes(cfg.evaluation.flow, plan.n_flows, dtype, interval)
+        + plan.n_flows * plan.n_swimmers * SWIMMER_BYTES,
+        "train.frames_per_batch": plan.frames_per_batch * FRAME_BYTES,
+        "eval.flows_per_batch": flow_table_bytes(held.flow, eval_flows, dtype, interval)
+        + eval_flows * held.sizes.n_swimmers * SWIMMER_BYTES,
+    }
+    key = max(parts, key=parts.get)
+    value = {"train.n_flows": plan.n_flows, "train.frames_per_batch": plan.frames_per_batch,
+             "eval.flows_per_batch": held.sizes.flows_per_batch}[key]
+    what = ", ".join(f"{k.split('.')[-1]} {v / 2**30:.1f} GiB" for k, v in parts.items())
+    check_memory(sum(parts.values()) + FLOW_WORK_BYTES, cfg.runtime.device, key, value,
+                 f"the training flows and swimmers, rollout batch and evaluation chunk ({what})")

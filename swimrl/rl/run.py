@@ -2,6 +2,9 @@ r"""A training run in a directory: fresh start, resume, final evaluation, ``metr
 
 Rules for the run directory (checked before any compute):
 
+* one process at a time: a run holds the directory's lock
+  (:func:`~swimrl.evaluation.jobs.run_lock`), taken before the rules below are checked again;
+  a second process is refused (one line naming the holder's PID);
 * ``metrics.json`` exists (the run finished): error unless ``overwrite=true``, which deletes
   the run's outputs (``checkpoints/``, ``policy.pt``, ``metrics.json``, ``tb/``) and trains
   from scratch;
@@ -25,10 +28,11 @@ from pathlib import Path
 
 from swimrl.errors import ConfigError
 from swimrl.evaluation.compare import CompareConfig, compare, strategy_variants
+from swimrl.evaluation.jobs import preemption_signals, refuse_if_locked, run_lock
 from swimrl.evaluation.records import flatten, summary_line, write_comparison, write_json
 from swimrl.policies.files import checkpoint_path
 from swimrl.rl.checkpoint import load_checkpoint, upgrade_config
-from swimrl.rl.plan import TrainConfig, make_plan
+from swimrl.rl.plan import TrainConfig, TrainPlan, check_train_memory, make_plan
 from swimrl.rl.trainer import PPOTrainer
 
 log = logging.getLogger(__name__)
@@ -101,17 +105,34 @@ def run_dir_state(cfg: TrainConfig, out: Path) -> str:
 
 def check_run(cfg: TrainConfig, out: Path | None) -> str | None:
     """Everything checked before any compute: the derived sizes (:func:`make_plan`) and, for a
-    known run directory ``out``, the run-directory rules (:func:`run_dir_state`)."""
-    make_plan(cfg)
-    return None if out is None else run_dir_state(cfg, Path(out))
+    known run directory ``out``, that no other process holds it
+    (:func:`~swimrl.evaluation.jobs.refuse_if_locked`) and the run-directory rules
+    (:func:`run_dir_state`), and that the run fits the machine's memory
+    (:func:`~swimrl.rl.plan.check_train_memory`)."""
+    check_train_memory(cfg, make_plan(cfg))
+    if out is None:
+        return None
+    refuse_if_locked(Path(out))
+    return run_dir_state(cfg, Path(out))
 
 
 def train(cfg: TrainConfig, out: Path) -> dict | None:
-    """Train (or resume) in ``out``; returns the final metrics, or None if stopped early or
-    already finished."""
+    """Train (or resume) in ``out``, holding its lock (:func:`~swimrl.evaluation.jobs.run_lock`)
+    throughout; returns the final metrics, or None if stopped early or already finished.
+
+    A preemption signal (:func:`~swimrl.evaluation.jobs.preemption_signals`) during the
+    updates stops the run after the update in flight with a checkpoint and raises
+    :class:`~swimrl.evaluation.jobs.Preempted` (exit status
+    :data:`~swimrl.evaluation.jobs.PREEMPTED_EXIT`); one that arrives during the final
+    evaluation lets the run finish."""
     out = Path(out)
     plan = make_plan(cfg)
     cfg.runtime.apply()
+    with run_lock(out, "swimrl-train"):
+        return _train_locked(cfg, plan, out)
+
+
+def _train_locked(cfg: TrainConfig, plan: TrainPlan, out: Path) -> dict | None:
     device, dtype = cfg.runtime.device, cfg.runtime.dtype
     state = run_dir_state(cfg, out)
     if state == "finished":
@@ -154,17 +175,22 @@ def train(cfg: TrainConfig, out: Path) -> dict | None:
         plan.n_swimmers,
     )
     try:
-        stop = cfg.train.stop_after_updates
-        finished = trainer.train(None if stop is None else int(stop))
-        if not finished:
-            log.info(
-                "stopped after update %d/%d; continue with resume=true",
-                trainer.counters["updates"],
-                plan.n_updates,
-            )
-            return None
-        trainer.save_policy()
-        metrics = trainer.evaluate(cfg.held_out)
+        with preemption_signals() as preemption:
+            stop = cfg.train.stop_after_updates
+            finished = trainer.train(None if stop is None else int(stop), preemption)
+            u, frames = trainer.counters["updates"], trainer.counters["frames"]
+            if preemption.requested:
+                preemption.stop(f"after update {u}/{plan.n_updates} ({frames} frames): "
+                                f"checkpoint written to {checkpoint_path(out)}; continue with "
+                                "resume=true")
+            if not finished:
+                log.info("stopped after update %d/%d; continue with resume=true", u,
+                         plan.n_updates)
+                return None
+            trainer.save_policy()
+            metrics = trainer.evaluate(cfg.held_out)
+            if preemption.requested:
+                log.info("%s during the final evaluation: finishing the run", preemption.names)
     finally:
         trainer.close()
     metrics["policy"] = str(out)

@@ -16,7 +16,9 @@ Periodic deterministic evaluations (``Lambda = Lambda_max tanh(mu)``) on held-ou
 so successive points share their randomness); update 0 is the initial policy.
 
 Resume: the state after an update is checkpointed atomically; ``resume=true`` reloads it
-(networks, optimisers, schedulers, RNGs, counters) and continues with update ``u + 1``.
+(networks, optimisers, schedulers, RNGs, counters) and continues with update ``u + 1``; a
+preemption signal (:mod:`swimrl.evaluation.jobs`) stops the loop after the update in flight,
+with a checkpoint.
 Collector and environment are *not* checkpointed mid-episode: the resumed run starts fresh
 episodes (new flow realisations drawn from the restored env generator), so the frames
 collected after the last checkpoint and the unfinished episodes of the killed process are
@@ -37,6 +39,7 @@ from torch.profiler import record_function
 from tqdm.auto import tqdm
 
 from swimrl.errors import NonFiniteError
+from swimrl.evaluation.jobs import Preemption
 from swimrl.evaluation.rollout import EvalSetup, evaluate
 from swimrl.policies.files import checkpoint_path, load_file, policy_meta, policy_path, save_policy
 from swimrl.policies.networks import deterministic_actor, policy_std
@@ -303,9 +306,12 @@ class PPOTrainer:
         return [k for k in keys if k in data.keys(include_nested=True)]
 
     # -- main loop ----------------------------------------------------------------------------
-    def train(self, stop_after: int | None = None) -> bool:
-        """Run updates until the plan is done (returns True) or ``stop_after`` updates were
-        made in this call (returns False; the state is checkpointed)."""
+    def train(self, stop_after: int | None = None,
+              preemption: Preemption | None = None) -> bool:
+        """Run updates until the plan is done (returns True), ``stop_after`` updates were
+        made in this call, or ``preemption`` was requested (a signal, checked after each
+        update: the update in flight and its periodic evaluation are finished); then the
+        state is checkpointed and :attr:`finished_training` returned."""
         cfg, plan = self.cfg, self.plan
         if self.logger is None:
             self.logger = rlb.make_logger(self.run_dir)
@@ -376,7 +382,7 @@ class PPOTrainer:
                 if self.last_eval is not None:
                     post["R_eval"] = f"{self.last_eval['R_hat_mean']:.3f}"
                 bar.set_postfix(post, refresh=False)
-                last = u >= stop_at
+                last = u >= stop_at or (preemption is not None and preemption.requested)
                 if (
                     last
                     or u % int(cfg.train.checkpoint_every) == 0

@@ -9,7 +9,9 @@ Modules (FourierFlows.jl style): :mod:`.grid` (rfft2 wavenumbers, 2/3 mask), :mo
 :mod:`.state` (``omega_hat`` and the kinematics, :func:`flow_channels`), :mod:`.equation`
 (``L(k)`` and the advection term), :mod:`.forcing`, :mod:`.stepper` (ETDRK4, :class:`DNS`),
 :mod:`.diagnostics`, :mod:`.spinup` (spin-up and measured scales), :mod:`.store` (zarr layout and
-writer), :mod:`.run` (the run behind ``swimrl-dns``). The reader of a stored run is
+writer), :mod:`.integrity` (chunk checksums, checked reads, the per-snapshot finite / rms
+checks), :mod:`.verify` (a whole store checked, ``swimrl-dns-verify``), :mod:`.run` (the run
+behind ``swimrl-dns``). The reader of a stored run is
 :class:`swimrl.flows.sources.DNSStore`. See ``docs/dns.md``.
 """
 

@@ -10,6 +10,11 @@ Layout (zarr format 3, consolidated metadata, readable with ``xarray.open_zarr(p
     checkpoint/   solver state (complex128, same packing, unnormalised) + RNG state, as
                   omega_hat_<v>, rng_<v>; the attribute checkpoint_version = v points to it
 
+Every array ends its codec chain with a crc32c checksum of each chunk (``omega_hat``: no
+compression, then the checksum; the others: zarr's default zstd, then the checksum); a damaged
+chunk is an :class:`~swimrl.errors.IntegrityError` on reading
+(:mod:`swimrl.flows.dns.integrity`; ``swimrl-dns-verify`` checks a whole store).
+
 Channels ``(u_x, u_y, S_xx, S_xy, omega)`` are reconstructed from ``omega_hat`` by spectral
 differentiation (:func:`swimrl.flows.dns.state.flow_channels`); they equal the solver's own
 fields up to the float32 rounding of the stored coefficients (~1e-7 relative), at 1/11 of the
@@ -42,6 +47,14 @@ import zarr
 
 from swimrl.errors import ConfigError
 from swimrl.flows.dns.grid import dealias_cutoff
+from swimrl.flows.dns.integrity import (
+    SnapshotCheck,
+    compressors,
+    has_checksum,
+    read,
+    read_snapshots,
+    write,
+)
 
 log = logging.getLogger(__name__)
 
@@ -86,18 +99,26 @@ def store_record(path: str | Path) -> dict[str, Any]:
     """Provenance of the store at ``path`` for a result file: absolute path, ``status``,
     ``n_written`` and ``content_hash``, the SHA-256 of the root attributes (parameters,
     measured scales, progress) and of the committed ``time`` array and first and last
-    snapshots (the whole store would take minutes to hash at 512^2)."""
+    snapshots (the whole store would take minutes to hash at 512^2); ``checksums``: whether
+    its chunks carry crc32c checksums (verified on every read). The arrays read pass their
+    checksums and the snapshots :class:`~swimrl.flows.dns.integrity.SnapshotCheck`
+    (:class:`~swimrl.errors.IntegrityError` otherwise)."""
     path = Path(path).resolve()
     g = zarr.open_group(str(path), mode="r", use_consolidated=False)
     attrs = dict(g.attrs)
     n = int(attrs.get("n_written", 0))
     h = hashlib.sha256(json.dumps(attrs, sort_keys=True, default=str).encode())
-    h.update(np.asarray(g["time"][:n]).tobytes())
+    h.update(read(g["time"], path, "time", slice(0, n)).tobytes())
     if n:
-        h.update(np.asarray(g["omega_hat"][0]).tobytes())
-        h.update(np.asarray(g["omega_hat"][n - 1]).tobytes())
+        check = SnapshotCheck(int(attrs["n"]), float(attrs.get("length", 2 * math.pi)),
+                              float(attrs.get("u_rms", math.nan)), path)
+        for i in (0, n - 1):
+            c = read_snapshots(g["omega_hat"], path, i, i + 1)
+            check.check(torch.from_numpy(c), i)
+            h.update(c[0].tobytes())
     return {"path": str(path), "status": str(attrs.get("status")), "n_written": n,
-            "content_hash": "sha256:" + h.hexdigest()}
+            "content_hash": "sha256:" + h.hexdigest(),
+            "checksums": has_checksum(g["omega_hat"])}
 
 
 class DNSStoreWriter:
@@ -122,12 +143,14 @@ class DNSStoreWriter:
         g = zarr.open_group(str(path), mode="w-")
         g.create_array("omega_hat", shape=(0, 2 * K + 1, K + 1),
                        chunks=(chunk_times, 2 * K + 1, K + 1), dtype="complex64", fill_value=0,
-                       dimension_names=("time", "ky", "kx"), compressors=None)
+                       dimension_names=("time", "ky", "kx"), compressors=compressors(False))
         g.create_array("time", shape=(0,), chunks=(4096,), dtype="float64", fill_value=0,
-                       dimension_names=("time",))
-        ky = g.create_array("ky", shape=(2 * K + 1,), dtype="int32", dimension_names=("ky",))
+                       dimension_names=("time",), compressors=compressors())
+        ky = g.create_array("ky", shape=(2 * K + 1,), dtype="int32", dimension_names=("ky",),
+                            compressors=compressors())
         ky[:] = np.arange(-K, K + 1, dtype=np.int32)
-        kx = g.create_array("kx", shape=(K + 1,), dtype="int32", dimension_names=("kx",))
+        kx = g.create_array("kx", shape=(K + 1,), dtype="int32", dimension_names=("kx",),
+                            compressors=compressors())
         kx[:] = np.arange(0, K + 1, dtype=np.int32)
         g["omega_hat"].attrs.update({
             "long_name": "vorticity Fourier coefficients c_k, omega = sum_k c_k exp(i k.x)",
@@ -140,7 +163,7 @@ class DNSStoreWriter:
         d = g.require_group("diagnostics")
         for name in DIAG_FIELDS:
             d.create_array(name, shape=(0,), chunks=(4096,), dtype="float64", fill_value=0,
-                           dimension_names=("t",))
+                           dimension_names=("t",), compressors=compressors())
         g.require_group("checkpoint")
         g.attrs.update({**attrs, "format_version": FORMAT_VERSION, "status": "created",
                         "n_written": 0, "n_diag": 0})
@@ -161,8 +184,8 @@ class DNSStoreWriter:
         if arr.shape[0] < i + 1:
             arr.resize((i + 1, *arr.shape[1:]))
             tarr.resize((i + 1,))
-        arr[i] = c.to(torch.complex64).cpu().numpy()
-        tarr[i] = t
+        write(arr, self.path, "omega_hat", i, c.to(torch.complex64).cpu().numpy())
+        write(tarr, self.path, "time", i, t)
         self._pending_written = i + 1
         return i
 
@@ -174,7 +197,7 @@ class DNSStoreWriter:
             a = d[name]
             if a.shape[0] < i + 1:
                 a.resize((i + 1,))
-            a[i] = float(row[name])
+            write(a, self.path, f"diagnostics/{name}", i, float(row[name]))
         self._pending_diag = i + 1
 
     @property
@@ -205,7 +228,7 @@ class DNSStoreWriter:
     def _write_array(group: zarr.Group, name: str, data: np.ndarray) -> None:
         """``data`` as the array ``name`` of ``group`` (replacing a leftover of a killed run)."""
         group.create_array(name, shape=data.shape, dtype=data.dtype, overwrite=True,
-                           fill_value=0)[...] = data
+                           fill_value=0, compressors=compressors())[...] = data
 
     def _drop_checkpoints_except(self, version: int) -> None:
         """Delete checkpoint arrays of other versions (after the commit of ``version``)."""
@@ -235,14 +258,19 @@ class DNSStoreWriter:
         """``(omega_hat (N, N//2+1) complex128, rng_state or None)`` from the checkpoint."""
         ck = self.group["checkpoint"]
         w_name, rng_name = self._names()
+        step = self.group.attrs.get("step")
+        again = "the run cannot be resumed: pass store.overwrite=true to start it again"
         try:
-            w = unpack(torch.from_numpy(np.asarray(ck[w_name][...])), self.n)
-        except (KeyError, ValueError, OSError) as err:
-            raise FileExistsError(
-                f"{self.path}: the checkpoint {w_name} of step {self.group.attrs.get('step')} "
-                f"cannot be read ({err}); the run cannot be resumed: pass store.overwrite=true "
-                "to start it again") from err
-        rng = torch.from_numpy(np.asarray(ck[rng_name][...])) if rng_name in ck else None
+            arr = ck[w_name]
+        except (KeyError, OSError) as err:
+            raise FileExistsError(f"{self.path}: the checkpoint {w_name} of step {step} cannot "
+                                  f"be read ({err}); {again}") from err
+        w = unpack(torch.from_numpy(read(arr, self.path, f"checkpoint/{w_name} of step {step}",
+                                         advice=again)), self.n)
+        rng = None
+        if rng_name in ck:
+            rng = torch.from_numpy(read(ck[rng_name], self.path,
+                                        f"checkpoint/{rng_name} of step {step}", advice=again))
         return w, rng
 
     def has_checkpoint(self) -> bool:
