@@ -72,6 +72,16 @@ def _stop(proc: subprocess.Popen, signum: int, log: Path) -> tuple[int, str]:
     return rc, log.read_text()
 
 
+def _preempted(rc: int, text: str, pattern: str) -> re.Match:
+    """Exit status 75, no traceback and exactly one ``preempted`` line, matching ``pattern``."""
+    assert rc == PREEMPTED_EXIT, text[-3000:]
+    lines = [line for line in text.splitlines() if "preempted" in line]
+    assert len(lines) == 1 and "Traceback" not in text, text[-3000:]
+    m = re.search(pattern, lines[0])
+    assert m, lines[0]
+    return m
+
+
 def _dead_pid() -> int:
     """The PID of a process that has exited."""
     done = subprocess.Popen([sys.executable, "-c", "pass"])
@@ -92,16 +102,13 @@ def test_sigterm_stops_training_after_the_update_in_flight_and_resume_finishes(
     with pytest.raises(RunDirInUseError, match=holder):
         train(resumed, out)
     rc, text = _stop(proc, signal.SIGTERM, log)
-    assert rc == PREEMPTED_EXIT, text[-3000:]
-    lines = [line for line in text.splitlines() if "preempted" in line]
-    assert len(lines) == 1 and "Traceback" not in text, text[-3000:]
-    m = re.search(r"preempted by SIGTERM after update (\d+)/30 \((\d+) frames\): checkpoint "
-                  r"written to (\S+); continue with resume=true$", lines[0])
-    assert m and Path(m[3]) == checkpoint_path(out), lines[0]
+    m = _preempted(rc, text, r"preempted by SIGTERM after update (\d+)/30 \((\d+) frames\): "
+                   r"checkpoint written to (\S+); continue with resume=true$")
+    assert Path(m[3]) == checkpoint_path(out), m[0]
     updates = int(m[1])
     assert 2 <= updates < 30 and int(m[2]) == 80 * updates
     assert load_file(checkpoint_path(out))["counters"]["updates"] == updates
-    assert lines[0] in (out / "train.log").read_text()
+    assert m[0] in (out / "train.log").read_text()
     assert not (out / LOCK_FILE).exists() and not (out / "metrics.json").exists()
     # a lock file left by a killed process blocks nothing; resume=true finishes the run
     (out / LOCK_FILE).write_text(json.dumps({"pid": _dead_pid(), "host": "x", "command": "x",
@@ -116,12 +123,9 @@ def test_sigusr1_stops_a_comparison_after_the_chunk_in_flight(compose_cfg, tmp_p
     proc, log = _start(COMPARE, [*COMPARISON, f"hydra.run.dir={out}"], tmp_path)
     _wait_for(out / PARTIAL, proc, log)  # the first chunk is done
     rc, text = _stop(proc, signal.SIGUSR1, log)
-    assert rc == PREEMPTED_EXIT, text[-3000:]
-    lines = [line for line in text.splitlines() if "preempted" in line]
-    assert len(lines) == 1 and "Traceback" not in text, text[-3000:]
-    m = re.search(r"preempted by SIGUSR1 with (\d+) flow chunk\(s\) of 8 left: partial record "
-                  r"written to (\S+); continue with compare.resume=true$", lines[0])
-    assert m and Path(m[2]) == out / PARTIAL, lines[0]
+    m = _preempted(rc, text, r"preempted by SIGUSR1 with (\d+) flow chunk\(s\) of 8 left: "
+                   r"partial record written to (\S+); continue with compare.resume=true$")
+    assert Path(m[2]) == out / PARTIAL, m[0]
     state = json.loads((out / PARTIAL).read_text())
     assert 1 <= sum(len(d) for d in state["done"]) == 8 - int(m[1]) < 8
     assert not (out / "comparison.json").exists() and not (out / LOCK_FILE).exists()
