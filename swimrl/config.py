@@ -17,7 +17,7 @@ from pathlib import Path
 
 from omegaconf import DictConfig, ListConfig, OmegaConf
 
-from swimrl.analysis.figures import DNSFiguresConfig, FiguresConfig
+from swimrl.analysis.figures.records import FIGURES, DNSFiguresConfig, FiguresConfig
 from swimrl.analysis.fit_minimal import FitConfig, read_coefficients
 from swimrl.analysis.gain_scan import GainScanConfig
 from swimrl.env import EnvParams
@@ -219,14 +219,12 @@ def figures_config(cfg: DictConfig) -> FiguresConfig:
     """``swimrl-figures`` (``conf/figures.yaml``); paths are taken from the launch directory."""
     from hydra.utils import to_absolute_path
 
-    from swimrl.analysis.figures import BUILDERS
-
     rt = runtime(cfg)
     spec = flow_spec(cfg.flow, rt)
     one_of("flow.name", cfg.flow.name, ("stochastic",))
     only = cfg.get("only")
     if only is not None:
-        one_of("only", str(only), tuple(BUILDERS))
+        one_of("only", str(only), FIGURES)
     f = cfg.figures
     return FiguresConfig(
         out=Path(to_absolute_path(str(cfg.out))),

@@ -11,8 +11,8 @@ import pytest
 import torch
 from hydra import compose, initialize_config_module
 
-from swimrl.analysis import dns_figures as dfig
-from swimrl.analysis.figures import DNSFiguresConfig, FiguresConfig
+from swimrl.analysis.figures import dns as dfig
+from swimrl.analysis.figures.records import DNSFiguresConfig, FiguresConfig
 from swimrl.env import EnvParams
 from swimrl.flows.build import StochasticSpec
 from swimrl.runtime import Runtime
@@ -90,7 +90,7 @@ def test_figure_draws_every_panel_from_tiny_records(tmp_path):
 def test_replay_record_is_made_once_from_the_store_and_read_after(tmp_path):
     """dns_record on a tiny stored run: made from the store, written, then read (also with
     the store gone); box units; R_hat = final distance / v_s T; videos 5 and 10 draw it."""
-    from swimrl.analysis.videos import video_cloud, video_trajectories
+    from swimrl.analysis.figures.videos import video_cloud, video_trajectories
     from swimrl.config import dns_run
     from swimrl.flows.dns.run import run_dns
 

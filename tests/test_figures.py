@@ -1,5 +1,5 @@
 """Figures (swimrl.analysis.figures): policy-map binning, the S_nn statistic, each figure on a
-tiny record, and the cached evaluation records."""
+tiny record, the cached evaluation records, and the builders' names."""
 
 from __future__ import annotations
 
@@ -11,9 +11,11 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from swimrl.analysis import figures
+from swimrl.analysis.figures import ablation, mechanism, records, robustness, stochastic, training
+from swimrl.analysis.figures.build import BUILDERS
 from swimrl.analysis.performance import load, summarise
 from swimrl.analysis.policy_maps import binned_mean, snn_extremes
+from swimrl.analysis.training_curves import PAPER_EPISODE_FRAMES
 from swimrl.env import EnvParams
 from swimrl.flows.build import StochasticSpec
 from swimrl.runtime import Runtime
@@ -58,55 +60,55 @@ def test_figure_functions_on_tiny_records(tmp_path):
     sig, lam = _record()
     n_dec = sig.shape[1]
     traj = np.cumsum(RNG.normal(0, 0.1, (3, 2, n_dec + 1, 2)), axis=2)
-    out = figures.fig_ku01(traj, sig, lam, sig[:2], np.sign(sig[:2, :, 1]), tmp_path / "a.png")
+    out = mechanism.fig_ku01(traj, sig, lam, sig[:2], np.sign(sig[:2, :, 1]), tmp_path / "a.png")
     assert out["corr_smart"] > 0.8 and (tmp_path / "a.png").stat().st_size > 0
-    ku_inf = figures.fig_ku_inf(sig, lam, tmp_path / "b.png")
+    ku_inf = mechanism.fig_ku_inf(sig, lam, tmp_path / "b.png")
     assert ku_inf["snn"]["n"] == lam.size and ku_inf["b"].shape == (30, 30)
-    pattern = figures.fig_ku_pattern({0.1: (sig, lam), 10.0: (sig, -lam)}, tmp_path / "c.png")
+    pattern = mechanism.fig_ku_pattern({0.1: (sig, lam), 10.0: (sig, -lam)}, tmp_path / "c.png")
     top = pattern[(0.1, "n_theta")]
     assert np.nanmean(top[-5:, -5:]) > 0.5 and np.nanmean(top[:5, -5:]) < -0.5  # S_np x n_theta
     vort = RNG.normal(size=(8, 8))
     two = {"a": traj[0, 0] + 1, "b": traj[1, 0] + 1}
-    sw = figures.fig_swimmer(vort, 2.0, two, tmp_path / "d.png")
+    sw = stochastic.fig_swimmer(vort, 2.0, two, tmp_path / "d.png")
     assert sw["path_length"]["a"] > 0 and sw["extent"][1] - sw["extent"][0] >= 2.0
     summaries = [summarise(r) for r in load([RESULTS])]
     finals = {k: traj[:, :, -1] for k in (0.1, 1.0)}
-    perf = figures.fig_smart_performance(summaries, finals, tmp_path / "e.png")
+    perf = stochastic.fig_smart_performance(summaries, finals, tmp_path / "e.png")
     assert perf["kubo"] == [0.1, 1.0, 10.0, 1e7] and perf["STO"][0] > perf["naive"][0]
     assert perf["spread"][1.0] == pytest.approx(np.linalg.norm(finals[1.0], axis=-1).mean(1))
     frames = np.arange(5.0) * 1e6
     curves = {"ku10_seed0": {"frames": frames, "eval/R_hat": np.r_[0.3, np.nan, 0.5, 0.6, 0.62]},
               "ku1e7_seed0": {"frames": frames, "eval/R_hat": np.r_[0.4, 0.5, 0.6, 0.7, 0.71],
                               "eval/R_hat_sem": np.full(5, 0.01)}}
-    assert figures.fig_training_curves(curves, tmp_path / "f.png") == {
+    assert training.fig_training_curves(curves, tmp_path / "f.png") == {
         "ku10_seed0": 0.62, "ku1e7_seed0": 0.71}
-    assert figures._ku_value("ku1e7") == 1e7 and figures.PAPER_EPISODE_FRAMES == 20000
+    assert training.ku_value("ku1e7") == 1e7 and PAPER_EPISODE_FRAMES == 20000
     r = {"smart": np.array([1.2, 1.0]), "naive": np.array([0.5, 0.5]), "STO": np.array([1, 1.0])}
-    sweep = figures.fig_sweep(np.array([1e-3, 1e-2]), r, {k: 0 * v for k, v in r.items()}, "x",
-                        tmp_path / "g.png", ratio=True)
+    sweep = robustness.fig_sweep(np.array([1e-3, 1e-2]), r, {k: 0 * v for k, v in r.items()},
+                                 "x", tmp_path / "g.png", ratio=True)
     assert sweep["ratio"] == pytest.approx([1.2, 1.0])
 
 
 def test_ku_record_is_cached_and_consistent(tmp_path):
-    cfg = figures.FiguresConfig(
+    cfg = records.FiguresConfig(
         out=tmp_path / "fig", cache=tmp_path / "cache", runtime=Runtime.from_names("cpu",
                                                                                   "float32", 1),
         params=EnvParams(duration=1.0), flow=StochasticSpec(kubo=10.0, n_grid=64, spacing=0.1),
         n_flows=2, n_swimmers=3, n_traj=2, progress=False)
-    a = figures.ku_record(cfg, 10.0)
+    a = records.ku_record(cfg, 10.0)
     assert a["final"].shape == (3, 6, 2) and a["traj"].shape == (3, 2, 11, 2)
     assert a["signals"].shape == (6, 10, 5) and a["sto_Lambda"].shape == (4, 10)
     assert np.allclose(a["traj"][:, :, -1], a["final"][:, :2], atol=1e-5)
     ref = 0.707 * 1.0 * 0.5  # v_s T in flow units (tau_K = 0.5 l_f / u_rms)
     assert np.linalg.norm(a["final"], axis=-1) / ref == pytest.approx(a["R_hat"], rel=1e-3)
     assert len(list((tmp_path / "cache").glob("ku_ku10-*.npz"))) == 1
-    b = figures.ku_record(cfg, 10.0)
+    b = records.ku_record(cfg, 10.0)
     assert all(np.array_equal(a[k], b[k]) for k in a)
     assert math.isclose(float(a["time"][-1]), 1.0)
 
 
 def test_videos_on_a_tiny_record(tmp_path):
-    from swimrl.analysis.videos import video_cloud, video_trajectories
+    from swimrl.analysis.figures.videos import video_cloud, video_trajectories
 
     steps = RNG.normal(0, 0.2, (3, 4, 3, 2))
     rec = {"cloud": np.cumsum(steps, axis=2), "traj_abs": 5 + np.cumsum(steps, axis=2),
@@ -130,18 +132,18 @@ def test_minimal_model_figure_reads_fits_and_draws_both_panels(tmp_path):
             "coefficients": {"c1": c1, "c2": 0.2, "c3": 0.1, "c4": -0.05},
             "stderr": dict.fromkeys(("c1", "c2", "c3", "c4"), 0.01),
             "config": {"flow": {"kubo": kubo}, "eval": {"n_flows": 8}}}))
-    fits = figures.read_fits(tmp_path / "fits")
+    fits = ablation.read_fits(tmp_path / "fits")
     assert list(fits) == [0.1, 1e7]
-    name = figures.minimal_name(fits[1e7])
+    name = ablation.minimal_name(fits[1e7])
     assert name == "minimal(0.4,0.2,0.1,-0.05)"
-    spec = figures._actor(name, None)
+    spec = records.actor(name, None)
     assert spec.name == "minimal" and spec.coeffs == (0.4, 0.2, 0.1, -0.05)
     kus = np.array(list(fits))
     r = {"smart": np.array([0.9, 0.7]), "minimal": np.array([0.88, 0.6]),
          "STO": np.array([0.93, 0.48])}
     coeffs = {k: np.array([f["coefficients"][k] for f in fits.values()])
               for k in ("c1", "c2", "c3", "c4")}
-    out = figures.fig_ablation(kus, r, {k: 0 * v for k, v in r.items()}, coeffs,
+    out = ablation.fig_ablation(kus, r, {k: 0 * v for k, v in r.items()}, coeffs,
                                {k: 0 * v for k, v in coeffs.items()}, tmp_path / "m.png")
     assert out["kubo"] == [0.1, 1e7] and out["c1"] == [1.5, 0.4] and out["minimal"][1] == 0.6
     assert "ablation" not in out  # (a) pending without records
@@ -199,7 +201,7 @@ def test_signal_ablation_records_summary_and_panel(tmp_path):
     assert sa.set_label(("S_np", "n_theta")) == r"[$n_\theta, S_{np}$]"
     with pytest.raises(ValueError, match="allowed"):
         sa.canonical(("n_r", "S_pn"))
-    out = figures.fig_ablation(np.array([10.0]), {"smart": np.array([0.6])},
+    out = ablation.fig_ablation(np.array([10.0]), {"smart": np.array([0.6])},
                                {"smart": np.array([0.0])}, {"c1": np.array([1.0])},
                                {"c1": np.array([0.1])}, tmp_path / "a.png", runs=runs)
     first = out["ablation"][summary[0]["label"]]
@@ -238,5 +240,11 @@ def test_find_curves_follows_linked_run_directories(tmp_path):
     (run / "curves.csv").write_text("frames,eval/R_hat\n0,0.2\n")
     (tmp_path / "chosen").mkdir()
     (tmp_path / "chosen" / "ku10_seed3").symlink_to(run, target_is_directory=True)
-    assert figures.find_curves(tmp_path / "chosen") == {
+    assert training.find_curves(tmp_path / "chosen") == {
         "ku10_seed3": tmp_path / "chosen" / "ku10_seed3" / "curves.csv"}
+
+
+def test_builders_are_the_configured_figures():
+    """``only=`` is checked against :data:`records.FIGURES` (without importing the builders):
+    the same names, in build order, as :data:`BUILDERS`."""
+    assert tuple(BUILDERS) == records.FIGURES

@@ -29,20 +29,19 @@ adds a run to the earlier ones without their stores.
 
 from __future__ import annotations
 
+import json
 import math
 from pathlib import Path
 
-import matplotlib
+import numpy as np
+import torch
 
-matplotlib.use("Agg")
-import matplotlib.pyplot as plt  # noqa: E402
-import numpy as np  # noqa: E402
-import torch  # noqa: E402
+from swimrl.flows.dns import diagnostics as dg
+from swimrl.flows.dns.grid import SpectralGrid
+from swimrl.flows.dns.params import DNSParams
+from swimrl.flows.sources import DNSStore
 
-from swimrl.flows.dns import diagnostics as dg  # noqa: E402
-from swimrl.flows.dns.grid import SpectralGrid  # noqa: E402
-from swimrl.flows.dns.params import DNSParams  # noqa: E402
-from swimrl.flows.sources import DNSStore  # noqa: E402
+from .plots import pyplot
 
 PDF_CHANNELS = {"omega": 4, "S_xx": 2, "S_xy": 3}
 COLOURS = {"omega": "tab:blue", "S_xx": "tab:green", "S_xy": "tab:red"}
@@ -83,6 +82,7 @@ def plot_spectrum(spec: dict, params: DNSParams, out: Path, fit: tuple[float, fl
     """E(k) with a k^-3 line and the fitted slope over ``fit``; Pi_Z(k)/D_Z. Returns slope."""
     k, e = spec["k"][1:], spec["E"][1:]
     slope = fit_slope(k, e, *fit)
+    plt = pyplot()
     fig, (ax, ax2) = plt.subplots(1, 2, figsize=(10, 4))
     ax.loglog(k, e, "k-", lw=1.5, label=r"$E(k)$")
     k_ref = np.array([fit[0], fit[1] * 2])
@@ -156,6 +156,7 @@ def pool_pdf_curves(curves: list[dict[str, dict]]) -> dict[str, dict]:
 
 def draw_pdfs(curves: dict[str, dict], out: Path) -> None:
     """Semi-log PDFs of each channel (over its standard deviation) and the Gaussian."""
+    plt = pyplot()
     fig, ax = plt.subplots(figsize=(5.5, 4))
     for name, c in curves.items():
         z, pdf = np.asarray(c["z"]), np.asarray(c["pdf"])
@@ -186,6 +187,7 @@ def plot_timeseries(path: Path, store: DNSStore, out: Path) -> None:
     """Energy/enstrophy and their rates from the ``diagnostics`` group (checksums checked)."""
     d = store.diagnostics()
     t = d["t"]
+    plt = pyplot()
     fig, axs = plt.subplots(1, 2, figsize=(10, 3.6))
     axs[0].plot(t, d["energy"], label=r"$E$")
     axs[0].plot(t, d["enstrophy"] / 10, label=r"$Z/10$")
@@ -212,6 +214,7 @@ def plot_vorticity(store: DNSStore, out: Path, index: int = 0) -> None:
     """Image of ``omega / std(omega)`` at snapshot ``index`` (paper Fig. 6a)."""
     w = store.channels(index, index + 1)[0, ..., 4].numpy()
     s = float(w.std())
+    plt = pyplot()
     fig, ax = plt.subplots(figsize=(5, 4.4))
     im = ax.imshow(w / s, origin="lower", cmap="RdBu_r", vmin=-3, vmax=3,
                    extent=(0, store.length, 0, store.length))
@@ -303,14 +306,13 @@ def check_stores(paths: list[Path], out_dir: Path, n_snapshots: int = 50,
     added one at a time): the stability of ``u_rms`` and ``tau_K`` through each stored
     window, the PDFs pooled over all runs and the resolution of every run, into ``out_dir``;
     returns (and writes ``dns_checks.json``) the checks."""
-    import json
-
     out_dir = Path(out_dir)
     (out_dir / "runs").mkdir(parents=True, exist_ok=True)
     for path in map(Path, paths):
         rec = run_check(path, n_snapshots, fit)
         (out_dir / "runs" / f"{path.stem}.json").write_text(json.dumps(rec))
     records = [json.loads(p.read_text()) for p in sorted((out_dir / "runs").glob("*.json"))]
+    plt = pyplot()
     fig, axs = plt.subplots(1, 2, figsize=(10, 3.6))
     for rec in records:
         series, label = rec["series"], f"seed {rec['summary']['seed']}"

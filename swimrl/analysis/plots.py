@@ -1,4 +1,6 @@
-"""Figures of result records: ``R_hat`` against a constant shape factor and against Ku."""
+"""Figures of result records: ``R_hat`` against a constant shape factor and against Ku; and
+:func:`pyplot`, the one place the analysis imports ``matplotlib.pyplot`` (and chooses its
+non-interactive backend), when a figure is drawn."""
 
 from __future__ import annotations
 
@@ -7,13 +9,20 @@ from pathlib import Path
 import numpy as np
 
 
-def plot_naive_scan(record: dict, path) -> None:
-    """``R_hat`` (mean +- SEM) against the constant shape factor of naive strategies."""
+def pyplot():
+    """``matplotlib.pyplot`` on the non-interactive Agg backend, imported when a figure is
+    drawn (not when a module is imported)."""
     import matplotlib
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
+    return plt
+
+
+def plot_naive_scan(record: dict, path) -> None:
+    """``R_hat`` (mean +- SEM) against the constant shape factor of naive strategies."""
+    plt = pyplot()
     rows = [r for r in record["rows"] if r["label"].startswith("naive(")]
     if len(rows) < 2:
         return
@@ -41,11 +50,7 @@ def plot_naive_scan(record: dict, path) -> None:
 
 def plot_performance(summaries: list[dict], path: Path) -> None:
     """``R_hat`` against Ku (log axis): naive, STO, smart (mean over seeds and each seed)."""
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
+    plt = pyplot()
     ku = np.asarray([s["kubo"] for s in summaries])
     fig, ax = plt.subplots(figsize=(5.5, 3.8))
     baselines = (("naive", "k", r"naive ($\Lambda=0.98$)"), ("sto", "tab:green", "STO"))

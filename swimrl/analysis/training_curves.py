@@ -6,7 +6,8 @@
 Each curve is one column of a run's ``curves.csv`` (``frames`` and one column per
 TensorBoard tag; empty cells where a tag was not logged) against frames; the periodic
 held-out evaluation ``eval/R_hat`` is drawn with its SEM band when ``eval/R_hat_sem`` is
-there.
+there. :func:`draw_curve` draws one curve, here and in Fig. trainingCurves
+(:mod:`swimrl.analysis.figures.training`).
 """
 
 from __future__ import annotations
@@ -18,10 +19,28 @@ import numpy as np
 
 from swimrl.evaluation.records import read_curves
 
-__all__ = ["PAPER_EPISODE_FRAMES", "plot_training_curves", "read_curves"]
+from .plots import pyplot
+
+__all__ = ["PAPER_EPISODE_FRAMES", "draw_curve", "plot_training_curves", "read_curves"]
 
 #: frames of one of the paper's training episodes (10 swimmers x 2000 decisions)
 PAPER_EPISODE_FRAMES = 10 * 2000
+
+
+def draw_curve(ax, curve: dict[str, np.ndarray], tag: str = "eval/R_hat",
+               label: str | None = None, frames_per_unit: float = 1e6, ms: float = 3,
+               **band) -> tuple[np.ndarray, np.ndarray]:
+    """``tag`` of one ``curves.csv`` record against its frames / ``frames_per_unit`` on
+    ``ax`` (the cells where it was logged), with a +- SEM band (``band``: its style) where
+    ``<tag>_sem`` is recorded; returns the frames and the values drawn."""
+    ok = np.isfinite(curve[tag])
+    x, y = curve["frames"][ok], curve[tag][ok]
+    (line,) = ax.plot(x / frames_per_unit, y, marker="o", ms=ms, label=label)
+    if tag + "_sem" in curve:
+        s = curve[tag + "_sem"][ok]
+        ax.fill_between(x / frames_per_unit, y - s, y + s, color=line.get_color(), alpha=0.2,
+                        **band)
+    return x, y
 
 
 def plot_training_curves(
@@ -33,23 +52,11 @@ def plot_training_curves(
 ) -> dict[str, tuple[np.ndarray, np.ndarray]]:
     """``tag`` against frames for each labelled run (+- SEM band for ``eval/R_hat``) and
     horizontal reference lines; returns ``{label: (frames, values)}`` of what was drawn."""
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
+    plt = pyplot()
     fig, ax = plt.subplots(figsize=(6, 4))
     drawn = {}
     for label, path in runs.items():
-        c = read_curves(path)
-        ok = np.isfinite(c[tag])
-        x, y = c["frames"][ok], c[tag][ok]
-        (line,) = ax.plot(x / 1e6, y, marker="o", ms=3, label=label)
-        sem_tag = tag + "_sem"
-        if sem_tag in c:
-            s = c[sem_tag][ok]
-            ax.fill_between(x / 1e6, y - s, y + s, color=line.get_color(), alpha=0.2)
-        drawn[label] = (x, y)
+        drawn[label] = draw_curve(ax, read_curves(path), tag, label)
     for i, (label, value) in enumerate((references or {}).items()):
         ax.axhline(value, color=f"C{len(runs) + i}", ls="--", lw=1, label=label)
     ax.set_xlabel("training frames (millions of decisions)")

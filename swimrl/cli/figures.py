@@ -11,7 +11,8 @@ from pathlib import Path
 
 from omegaconf import DictConfig
 
-from swimrl.analysis.figures import FiguresConfig, build_figures
+from swimrl.analysis.figures.build import build_figures
+from swimrl.analysis.figures.records import FiguresConfig
 from swimrl.cli import command
 from swimrl.config import figures_config
 

@@ -1,4 +1,5 @@
-r"""Fig. ``dnsFlow`` and the DNS videos (5, 10) from committed records (``swimrl-figures``).
+r"""Fig. ``dnsFlow`` and the DNS replay record (also drawn by videos 5, 10) from committed
+records (``swimrl-figures``).
 
 * (a) the vorticity ``omega tau_K`` of a held-out DNS realisation with one smart swimmer's
   trajectory over ``glyph_window`` ``tau_K`` and its shape every ``glyph_every`` ``tau_K``:
@@ -36,6 +37,8 @@ from pathlib import Path
 
 import numpy as np
 
+from swimrl.analysis.plots import pyplot
+from swimrl.analysis.policy_maps import lambda_maps
 from swimrl.evaluation.records import markdown_table, read_curves, read_npz, write_npz
 from swimrl.evaluation.rollout import EvalSetup, EvalSizes
 from swimrl.evaluation.statistics import paired_ratio
@@ -43,19 +46,8 @@ from swimrl.flows.build import StoredRunSpec
 from swimrl.flows.dns.store import store_status
 from swimrl.policies.files import resolve_policy_file
 
-from .figures import (
-    COLORS,
-    FRAME_EVERY,
-    LABEL,
-    SIGNAL,
-    DNSFiguresConfig,
-    FiguresConfig,
-    _plt,
-    _save,
-    _sym,
-    record_strategies,
-)
-from .policy_maps import binned_mean
+from .records import FRAME_EVERY, DNSFiguresConfig, FiguresConfig, record_strategies
+from .style import COLORS, LABEL, save
 
 #: Largest aspect ratio drawn for a glyph (the swimmers' own reach ~10 at |Lambda| = 0.98).
 GLYPH_ASPECT_MAX = 4.0
@@ -92,7 +84,10 @@ def make_record(cfg: FiguresConfig, dns: DNSFiguresConfig) -> dict[str, np.ndarr
                       seed=cfg.seed, record={})
     a = record_strategies(setup, [dns.policy, "naive", "sto", dns.trained], "DNS", FRAME_EVERY)
     box = float(a["box"])
-    maps = policy_maps(a["signals"][0, 3], a["Lambda"][0, 3])
+    maps = {}  # the DNS-trained policy's maps (d), (e), as float32
+    for other, (mean, (x, y)) in lambda_maps(a["signals"][0, 3], a["Lambda"][0, 3]).items():
+        maps[f"map_{other}"] = mean.astype(np.float32)
+        maps[f"map_{other}_x"], maps[f"map_{other}_y"] = x, y
     pos = np.swapaxes(a["position"], 0, 1)[:3, 0] / box  # (3, S, N+1, 2)
     disp = pos - pos[..., :1, :]
     nt = min(dns.n_traj, pos.shape[1])
@@ -111,20 +106,6 @@ def make_record(cfg: FiguresConfig, dns: DNSFiguresConfig) -> dict[str, np.ndarr
         **{f"input_{k}": np.asarray(v) for k, v in record_inputs(cfg, dns).items()},
         **maps,
     }
-
-
-def policy_maps(signals: np.ndarray, lam: np.ndarray, bins: int = 30) -> dict[str, np.ndarray]:
-    """``<Lambda | S_np, n_theta>`` and ``<Lambda | S_np, omega>`` (as Fig. ku_pattern:
-    S_np and omega over their symmetric 99.5 % range, at least 5 samples per bin):
-    ``map_<other>`` ``(bins, bins)`` and its edges ``map_<other>_x``, ``map_<other>_y``."""
-    s = signals.reshape(-1, 5)
-    out = {}
-    for other, rng in (("n_theta", (-1.0, 1.0)), ("omega", _sym(s[:, 4]))):
-        mean, edges, _ = binned_mean(lam, [s[:, 3], s[:, SIGNAL[other]]], bins=bins,
-                                     ranges=[_sym(s[:, 3]), rng], min_count=5)
-        out[f"map_{other}"] = mean.astype(np.float32)
-        out[f"map_{other}_x"], out[f"map_{other}_y"] = edges
-    return out
 
 
 def dns_record(cfg: FiguresConfig, dns: DNSFiguresConfig) -> tuple[dict | None, str]:
@@ -249,7 +230,7 @@ def fig_dns_flow(rec: dict | None, pdfs: dict | None, transfer: dict[str, dict] 
     """(a) vorticity, trajectory and glyphs; (b) PDFs; (c) transfer ratios; (d), (e) the
     DNS-trained policy's maps; (f) its training curve. Panels whose record is None say so
     instead (or, for (f), stay empty)."""
-    plt = _plt()
+    plt = pyplot()
     fig, axes = plt.subplots(2, 3, figsize=(14, 8.6))
     (a, b, c), (d, e, f) = axes
     drawn: dict = {}
@@ -325,7 +306,7 @@ def fig_dns_flow(rec: dict | None, pdfs: dict | None, transfer: dict[str, dict] 
         c.text(0.5, 0.5, "no transfer records", ha="center", transform=c.transAxes)
     fig.suptitle(title, fontsize=8)
     fig.tight_layout()
-    _save(fig, path)
+    save(fig, path)
     return drawn
 
 
@@ -372,9 +353,12 @@ def _draw_transfer(ax, summary: dict[str, dict], dns_label: str) -> dict:
             "lines": {k: v["ratio"] for k, v in lines.items()}, "not_drawn": other}
 
 
-def build_dns_flow(cfg: FiguresConfig, dns: DNSFiguresConfig) -> dict:
-    """Fig. dnsFlow from the committed records (the replay record made first if missing and
-    a finished store is there)."""
+def build_dns_flow(cfg: FiguresConfig) -> dict:
+    """Fig. dnsFlow from the committed records of ``cfg.dns`` (the replay record made first
+    if missing and a finished store is there)."""
+    if cfg.dns is None:
+        return {"pending": "no dns.* records configured"}
+    dns = cfg.dns
     rec, why = dns_record(cfg, dns)
     pdfs = None
     if Path(dns.checks).exists():

@@ -5,9 +5,10 @@ r"""The paper's supplemental videos (MP4, Matplotlib + the ffmpeg of ``imageio-f
 * :func:`video_cloud` (videos 6-9): the displacements of all recorded swimmers (a dispersion
   cloud from the origin), inset: the ensemble-mean distance from the start.
 
-Both take the arrays of :func:`swimrl.analysis.figures.ku_record` (or of the DNS replay
-record, :mod:`swimrl.analysis.dns_figures`) and return what they drew; ``flow`` is the Kubo
-number or a label (``"DNS"``), ``unit`` the length unit of the positions.
+Both take the arrays of :func:`swimrl.analysis.figures.records.ku_record` (or of the DNS
+replay record, :func:`swimrl.analysis.figures.dns.dns_record`) and return what they drew;
+``flow`` is the Kubo number or a label (``"DNS"``), ``unit`` the length unit of the positions.
+:func:`build_videos` makes all ten.
 """
 
 from __future__ import annotations
@@ -16,14 +17,17 @@ from pathlib import Path
 
 import numpy as np
 
-from .figures import COLORS, STRATEGIES
+from swimrl.analysis.plots import pyplot
+
+from .dns import dns_record
+from .records import KUS, STRATEGIES, FiguresConfig, ku_name, ku_record
+from .style import COLORS
 
 
 def _writer(fps: int):
     import imageio_ffmpeg
     import matplotlib
 
-    matplotlib.use("Agg")
     matplotlib.rcParams["animation.ffmpeg_path"] = imageio_ffmpeg.get_ffmpeg_exe()
     from matplotlib.animation import FFMpegWriter
 
@@ -53,8 +57,9 @@ def _flow_label(flow: float | str) -> str:
 def video_trajectories(rec: dict, flow: float | str, path: Path, fps: int = 8,
                        unit: str = r"\ell_f") -> dict:
     """Videos 1-5 from ``rec['traj_abs']`` and ``rec['vorticity']``."""
-    import matplotlib.pyplot as plt
     from matplotlib.animation import FuncAnimation
+
+    plt = pyplot()
 
     traj, vort, box = rec["traj_abs"], rec["vorticity"], float(rec["box"])
     n = min(traj.shape[2], vort.shape[0])
@@ -98,8 +103,9 @@ def video_trajectories(rec: dict, flow: float | str, path: Path, fps: int = 8,
 def video_cloud(rec: dict, flow: float | str, path: Path, fps: int = 8,
                 unit: str = r"\ell_f") -> dict:
     """Videos 6-10 from ``rec['cloud']`` (``(3, S, frames, 2)``)."""
-    import matplotlib.pyplot as plt
     from matplotlib.animation import FuncAnimation
+
+    plt = pyplot()
 
     cloud = rec["cloud"]
     n = cloud.shape[2]
@@ -131,10 +137,26 @@ def video_cloud(rec: dict, flow: float | str, path: Path, fps: int = 8,
     return {"frames": n, "mean_distance": dist[:, -1].tolist()}
 
 
-def _save(fig, anim, path: Path, fps: int) -> None:
-    import matplotlib.pyplot as plt
+def build_videos(cfg: FiguresConfig) -> dict:
+    """Supplemental videos 1-4 (trajectories) and 6-9 (clouds) into ``<out>/../videos``, and
+    5 and 10 in the DNS from its replay record."""
+    out, where = {}, Path(cfg.out).parent / "videos"
+    for i, kubo in enumerate(KUS):
+        rec = ku_record(cfg, kubo)
+        out[i + 1] = video_trajectories(rec, kubo, where / f"video{i + 1}_{ku_name(kubo)}.mp4")
+        out[i + 6] = video_cloud(rec, kubo, where / f"video{i + 6}_{ku_name(kubo)}_cloud.mp4")
+    rec, why = (None, "no dns.* records configured") if cfg.dns is None else dns_record(cfg,
+                                                                                      cfg.dns)
+    if rec is None:
+        out["pending"] = f"videos 5, 10: {why}"
+    else:
+        out[5] = video_trajectories(rec, "DNS", where / "video5_dns.mp4", unit="L")
+        out[10] = video_cloud(rec, "DNS", where / "video10_dns_cloud.mp4", unit="L")
+    return out
 
+
+def _save(fig, anim, path: Path, fps: int) -> None:
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
     anim.save(str(path), writer=_writer(fps), dpi=100)  # even pixel sizes (yuv420p)
-    plt.close(fig)
+    pyplot().close(fig)

@@ -1,0 +1,22 @@
+r"""The paper's figures from the shipped policies and the committed records (``swimrl-figures``).
+
+Each figure has a ``fig_<name>(data..., path)`` function that draws it from arrays and returns
+what it drew, and a ``build_<name>(cfg)`` builder that gathers the arrays (evaluations cached
+by :func:`.records.cached`, committed records) and calls it. One module per family of figures,
+above the two modules they share:
+
+* :mod:`.stochastic`: Fig. 1(a) (swimmer) and smartPerformance;
+* :mod:`.mechanism`: ku0.1, kuInf (with the S_nn statistic) and ku_pattern;
+* :mod:`.training`: trainingCurves;
+* :mod:`.ablation`: ablation (signal sets, the minimal model);
+* :mod:`.robustness`: robustness-noise and robustness;
+* :mod:`.dns`: dnsFlow and its replay record;
+* :mod:`.videos`: the supplemental videos 1-10;
+* :mod:`.records`: the configuration (:class:`~.records.FiguresConfig`), the evaluation
+  records and their cache; :mod:`.style`: colours, labels, drawing and saving;
+* :mod:`.build`: :data:`~.build.BUILDERS` (name -> builder, in build order) and
+  :func:`~.build.build_figures`.
+
+This package imports nothing itself: :mod:`swimrl.config` reads :mod:`.records` without the
+builders.
+"""
