@@ -34,19 +34,15 @@ from swimrl.flows.build import (
 )
 from swimrl.flows.dns.params import DNSParams
 from swimrl.flows.dns.run import DNSRun
-from swimrl.flows.stochastic import kubo_label
+from swimrl.flows.labels import flow_tag, kubo_label
 from swimrl.policies.baselines import StrategySpec
 from swimrl.policies.networks import ModelSpec
 from swimrl.rl.plan import LossSettings, OptimSettings, TrainConfig, TrainSettings
 from swimrl.runtime import Runtime
 
-
-def flow_tag(flow: DictConfig) -> str:
-    """Run-directory tag of a flow: ``ku10.0`` for the stochastic flow, else its name."""
-    return f"ku{flow.kubo}" if flow.name == "stochastic" else str(flow.name)
-
-
-OmegaConf.register_new_resolver("flow_tag", flow_tag, replace=True)
+#: ``${flow_tag:${flow}}`` -> ``ku10.0`` for the stochastic flow, else its name (run directories)
+OmegaConf.register_new_resolver(
+    "flow_tag", lambda flow: flow_tag(flow.name, flow.get("kubo")), replace=True)
 #: ``${ku:${flow.kubo}}`` -> ``0.1``, ``1``, ``10``, ``1e7`` (names of policies and records per Ku)
 OmegaConf.register_new_resolver("ku", kubo_label, replace=True)
 

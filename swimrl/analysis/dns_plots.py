@@ -36,6 +36,7 @@ from pathlib import Path
 import numpy as np
 import torch
 
+from swimrl.atomic import atomic_write_text
 from swimrl.flows.dns import diagnostics as dg
 from swimrl.flows.dns.grid import SpectralGrid
 from swimrl.flows.dns.params import DNSParams
@@ -310,7 +311,7 @@ def check_stores(paths: list[Path], out_dir: Path, n_snapshots: int = 50,
     (out_dir / "runs").mkdir(parents=True, exist_ok=True)
     for path in map(Path, paths):
         rec = run_check(path, n_snapshots, fit)
-        (out_dir / "runs" / f"{path.stem}.json").write_text(json.dumps(rec))
+        atomic_write_text(out_dir / "runs" / f"{path.stem}.json", json.dumps(rec))
     records = [json.loads(p.read_text()) for p in sorted((out_dir / "runs").glob("*.json"))]
     plt = pyplot()
     fig, axs = plt.subplots(1, 2, figsize=(10, 3.6))
@@ -341,5 +342,5 @@ def check_stores(paths: list[Path], out_dir: Path, n_snapshots: int = 50,
               "all_resolved": all(r["kmax_l_nu"] >= 1 for r in runs),
               "u_rms_spread_over_runs": float(np.std(u_rms) / np.mean(u_rms)),
               "store_bytes_total": int(sum(r["store_bytes"] for r in runs))}
-    (out_dir / "dns_checks.json").write_text(json.dumps(checks, indent=1))
+    atomic_write_text(out_dir / "dns_checks.json", json.dumps(checks, indent=1))
     return checks

@@ -30,6 +30,7 @@ from scipy.optimize import curve_fit
 from swimrl.env import SwimmerEnv
 from swimrl.errors import ConfigError, as_int
 from swimrl.evaluation.rollout import EvalConfig, actor_for, chunk_seed, run_episodes
+from swimrl.flows.labels import ku_number
 from swimrl.policies.baselines import build_strategy, minimal_model
 
 
@@ -119,7 +120,8 @@ def run_fit(cfg: FitConfig) -> dict:
                                      p0=coeffs)[0] for f in range(sizes.n_flows)])
     spread = per_flow.std(axis=0, ddof=1) if sizes.n_flows > 1 else np.full(4, np.nan)
     flow = setup.record["flow"]
-    knob = f"flow.kubo={flow['kubo']:g}" if flow["name"] == "stochastic" else f"flow={flow['name']}"
+    knob = (f"flow.kubo={ku_number(flow['kubo'])}" if flow["name"] == "stochastic"
+            else f"flow={flow['name']}")
     return {
         "coefficients": c,
         "stderr": {k: float(v) for k, v in zip(names, err, strict=True)},

@@ -23,6 +23,11 @@ import numpy as np
 
 from swimrl.evaluation.records import markdown_table
 from swimrl.evaluation.statistics import mean_std_sem, paired_ratio
+from swimrl.flows.labels import ku_number
+from swimrl.policies.baselines import StrategyLabel
+
+#: The baseline rows every comparison must hold: STO and the paper's naive (Lambda = 0.98).
+STO, NAIVE = StrategyLabel("sto").label, StrategyLabel.naive(0.98).label
 
 
 def load(paths: list[Path]) -> list[dict]:
@@ -48,14 +53,14 @@ def summarise(rec: dict, exclude: tuple[str, ...] = ()) -> dict:
     label contains one of the ``exclude`` substrings (e.g. extra policies in the comparison).
     """
     rows = {r["label"]: r for r in rec["rows"]}
-    if "sto" not in rows or "naive(+0.98)" not in rows:
-        raise ValueError(f"{rec['_path']}: needs the rows 'sto' and 'naive(+0.98)'")
-    sto = np.asarray(rows["sto"]["per_flow"])
-    naive = np.asarray(rows["naive(+0.98)"]["per_flow"])
+    if STO not in rows or NAIVE not in rows:
+        raise ValueError(f"{rec['_path']}: needs the rows {STO!r} and {NAIVE!r}")
+    sto = np.asarray(rows[STO]["per_flow"])
+    naive = np.asarray(rows[NAIVE]["per_flow"])
     best = naive if naive.mean() > sto.mean() else sto
     seeds = []
     for label, r in rows.items():
-        if not label.startswith("policy(") or any(x in label for x in exclude):
+        if StrategyLabel.parse(label).name != "policy" or any(x in label for x in exclude):
             continue
         per = np.asarray(r["per_flow"])
         seeds.append({"label": label, "R_hat_mean": r["R_hat_mean"], "R_hat_sem": r["R_hat_sem"],
@@ -68,8 +73,8 @@ def summarise(rec: dict, exclude: tuple[str, ...] = ()) -> dict:
         "n_flows": rec["n_flows"],
         "n_swimmers": rec["n_swimmers"],
         "seed": rec["seed"],
-        "naive": rows["naive(+0.98)"],
-        "sto": rows["sto"],
+        "naive": rows[NAIVE],
+        "sto": rows[STO],
         "best_baseline": "naive" if best is naive else "STO",
         "seeds": seeds,
         "smart_mean": smart_mean,
@@ -84,7 +89,7 @@ def markdown(summaries: list[dict]) -> str:
     rows = []
     for s in summaries:
         seeds = ", ".join(f"{x['R_hat_mean']:.3f}±{x['R_hat_sem']:.3f}" for x in s["seeds"])
-        rows.append([f"{s['kubo']:g}", f"{s['n_flows']} x {s['n_swimmers']}",
+        rows.append([ku_number(s["kubo"]), f"{s['n_flows']} x {s['n_swimmers']}",
                      f"{s['naive']['R_hat_mean']:.3f}±{s['naive']['R_hat_sem']:.3f}",
                      f"{s['sto']['R_hat_mean']:.3f}±{s['sto']['R_hat_sem']:.3f}", seeds,
                      f"{s['smart_mean']:.3f} ± {s['smart_seed_std']:.3f}"])
@@ -92,7 +97,7 @@ def markdown(summaries: list[dict]) -> str:
     for s in summaries:
         r1 = ", ".join(f"{x['vs_sto'][0]:.3f}±{x['vs_sto'][1]:.3f}" for x in s["seeds"])
         r2 = ", ".join(f"{x['vs_best'][0]:.3f}±{x['vs_best'][1]:.3f}" for x in s["seeds"])
-        ratios.append([f"{s['kubo']:g}", r1, f"{s['vs_sto_mean']:.3f}", r2,
+        ratios.append([ku_number(s["kubo"]), r1, f"{s['vs_sto_mean']:.3f}", r2,
                        f"{s['vs_best_mean']:.3f}", s["best_baseline"]])
     return (markdown_table(["Ku", "flows x swimmers", "naive (Λ=0.98)", "STO", "smart, per seed",
                             "smart, mean ± std over seeds"], rows) + "\n"

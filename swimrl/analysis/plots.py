@@ -8,6 +8,9 @@ from pathlib import Path
 
 import numpy as np
 
+from swimrl.flows.labels import ku_display
+from swimrl.policies.baselines import StrategyLabel
+
 
 def pyplot():
     """``matplotlib.pyplot`` on the non-interactive Agg backend, imported when a figure is
@@ -23,10 +26,12 @@ def pyplot():
 def plot_naive_scan(record: dict, path) -> None:
     """``R_hat`` (mean +- SEM) against the constant shape factor of naive strategies."""
     plt = pyplot()
-    rows = [r for r in record["rows"] if r["label"].startswith("naive(")]
-    if len(rows) < 2:
+    labels = [StrategyLabel.parse(r["label"]) for r in record["rows"]]
+    scan = [(label.numbers[0], r) for label, r in zip(labels, record["rows"], strict=True)
+            if label.name == "naive" and label.arg]
+    if len(scan) < 2:
         return
-    lam = [float(r["label"][6:-1]) for r in rows]
+    lam, rows = [x for x, _ in scan], [r for _, r in scan]
     fig, ax = plt.subplots(figsize=(5, 3.5))
     ax.errorbar(
         lam,
@@ -40,7 +45,7 @@ def plot_naive_scan(record: dict, path) -> None:
     ax.set_xlabel(r"constant shape factor $\Lambda$")
     ax.set_ylabel(r"$\hat R$")
     ax.set_title(
-        f"naive strategies, Ku = {flow.get('kubo', float('nan')):g} "
+        f"naive strategies, {ku_display(flow.get('kubo', float('nan')))} "
         f"({record['n_flows']} flows x {record['n_swimmers']})"
     )
     fig.tight_layout()

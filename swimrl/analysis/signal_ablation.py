@@ -23,7 +23,9 @@ import numpy as np
 
 from swimrl.evaluation.records import markdown_table, read_curves
 from swimrl.evaluation.statistics import mean_std_sem
+from swimrl.flows.labels import ku_display
 from swimrl.physics.signals import SIGNAL_NAMES
+from swimrl.policies.baselines import StrategyLabel
 
 from .training_curves import PAPER_EPISODE_FRAMES
 
@@ -89,8 +91,8 @@ def _run(cmp_path: Path) -> AblationRun | None:
     cmp = json.loads(cmp_path.read_text())
     metrics = json.loads(metrics_path.read_text())
     rows = cmp.get("rows") or []
-    policy = [r for r in rows if r["label"].startswith("policy")]
-    if not rows or rows[0]["label"] != "sto" or len(policy) != 1:
+    policy = [r for r in rows if StrategyLabel.parse(r["label"]).name == "policy"]
+    if not rows or rows[0]["label"] != StrategyLabel("sto").label or len(policy) != 1:
         raise ValueError(f"{cmp_path}: expected STO first and one policy row, got "
                          f"{[r['label'] for r in rows]}")
     if policy[0].get("per_flow") != metrics.get("per_flow"):
@@ -151,7 +153,7 @@ def ablation_markdown(runs: list[AblationRun], summary: list[dict]) -> str:
     """The table of Fig. ablation (a): per signal set, each seed's smart and STO R_hat and
     paired ratio, and the mean and std over seeds of the ratio."""
     flows, swimmers = runs[0].held_out
-    intro = (f"Ku = {runs[0].kubo:g}, {runs[0].frames / 1e6:g}M frames per run; each run's "
+    intro = (f"{ku_display(runs[0].kubo)}, {runs[0].frames / 1e6:g}M frames per run; each run's "
              f"smart and STO on its {flows} held-out flows x {swimmers} swimmers (evaluation "
              "seed 1000000 + seed)\n\n")
     head = ["signals", "seeds", "smart R̂ per seed", "STO R̂ per seed",

@@ -1,7 +1,9 @@
 """Training curves from committed ``curves.csv`` records (written by ``swimrl-train``).
 
-    python -m swimrl.analysis.training_curves OUT.png LABEL=RUN_OR_CSV [LABEL=...]
+    swimrl-training-curves OUT.png LABEL=RUN_OR_CSV [LABEL=...]
         [--tag eval/R_hat] [--reference LABEL=VALUE ...]
+
+(or ``python -m swimrl.analysis.training_curves ...``).
 
 Each curve is one column of a run's ``curves.csv`` (``frames`` and one column per
 TensorBoard tag; empty cells where a tag was not logged) against frames; the periodic

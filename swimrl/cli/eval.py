@@ -22,6 +22,21 @@ from swimrl.evaluation.trajectories import TRAJECTORY_FILE, TrajectoryRecorder, 
 
 log = logging.getLogger(__name__)
 
+#: The actor the last check loaded, with what it was loaded from. The check runs twice, from
+#: the ``CheckFirst`` callback and again in the main (holding the run directory's lock): the
+#: main takes the callback's actor instead of reading the policy file again.
+_LOADED: dict[str, object] = {}
+
+
+def load_actor(c: EvalConfig) -> Actor:
+    """The actor of ``c`` (:func:`~swimrl.evaluation.rollout.actor_for`); the one the last
+    check loaded when it was for the same strategy, policy and env parameters."""
+    key = (c.strategy, c.policy, c.setup.params)
+    if _LOADED.get("key") != key:
+        _LOADED.clear()
+        _LOADED.update(key=key, actor=actor_for(c.strategy, c.policy, c.setup.params))
+    return _LOADED["actor"]
+
 
 def check(cfg: DictConfig, out: Path | None) -> tuple[EvalConfig, Actor]:
     """Parse and check the config, refuse to replace a result, load the actor."""
@@ -30,7 +45,7 @@ def check(cfg: DictConfig, out: Path | None) -> tuple[EvalConfig, Actor]:
         refuse_if_locked(out)
         refuse_overwrite(out / "metrics.json", c.overwrite)
     check_eval_memory(c.setup)
-    return c, actor_for(c.strategy, c.policy, c.setup.params)
+    return c, load_actor(c)
 
 
 @command("evaluate", check=check)
@@ -38,6 +53,7 @@ def main(cfg: DictConfig) -> dict:
     target = run_dir() / "metrics.json"
     with run_lock(run_dir(), "swimrl-eval"):  # one process per run directory
         c, actor = check(cfg, run_dir())
+        _LOADED.clear()  # a multirun's next job reads its policy file again
         n_record = c.setup.sizes.record
         recorder = TrajectoryRecorder(n_record) if n_record else None
         metrics = evaluate(c.setup, actor, c.strategy.name, recorder)

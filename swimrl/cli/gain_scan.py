@@ -15,6 +15,7 @@ from pathlib import Path
 from omegaconf import DictConfig
 
 from swimrl.analysis.gain_scan import GainScanConfig, gain_scan, markdown
+from swimrl.atomic import atomic_write_text
 from swimrl.cli import command, run_dir
 from swimrl.config import gain_scan_config
 from swimrl.evaluation.records import refuse_overwrite, write_json
@@ -41,7 +42,7 @@ def main(cfg: DictConfig) -> list[dict]:
     rows = gain_scan(c)
     table = markdown(rows)
     print(table)
-    (out / TABLE).write_text(table)
+    atomic_write_text(out / TABLE, table)
     record = {"policy": c.policy, "gains": list(c.gains), "rows": rows, "config": c.setup.record}
     target = write_json(record, out / RECORD, overwrite=c.overwrite)  # last: marks it finished
     log.info("wrote %s", target)

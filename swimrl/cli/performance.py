@@ -11,6 +11,7 @@ from pathlib import Path
 
 from swimrl.analysis.performance import load, markdown, summarise
 from swimrl.analysis.plots import plot_performance
+from swimrl.atomic import atomic_write_text
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -28,8 +29,7 @@ def main(argv: list[str] | None = None) -> int:
     table = markdown(summaries)
     print(table)
     if args.md is not None:
-        args.md.parent.mkdir(parents=True, exist_ok=True)
-        args.md.write_text(table + "\n")
+        atomic_write_text(args.md, table + "\n", make_dirs=True)
         print(f"wrote {args.md}")
     if args.out is not None:
         plot_performance(summaries, args.out)

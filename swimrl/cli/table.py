@@ -13,6 +13,7 @@ import sys
 from pathlib import Path
 
 from swimrl.analysis.table import build_rows, collect, markdown, swept_keys, to_csv
+from swimrl.atomic import atomic_write_text
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -39,9 +40,9 @@ def main(argv: list[str] | None = None) -> int:
     keys, rows = build_rows(records, args.average)
     md = markdown(keys, rows)
     if args.md:
-        args.md.write_text(md)
+        atomic_write_text(args.md, md)
     if args.csv:
-        args.csv.write_text(to_csv(keys, rows))
+        atomic_write_text(args.csv, to_csv(keys, rows))
     sys.stdout.write(md)
     return 0
 

@@ -29,7 +29,7 @@ import numpy as np
 import torch
 
 from swimrl.errors import BadFileError, ConfigError
-from swimrl.policies.baselines import STRATEGIES, StrategySpec
+from swimrl.policies.baselines import STRATEGIES, StrategyLabel, StrategySpec
 
 from .jobs import Preemption
 from .records import summary_line, write_json
@@ -87,19 +87,22 @@ def strategy_variants(
         if name == "naive":
             for lam in naive_shape_factors:
                 spec = StrategySpec("naive", shape_factor=float(lam))
-                out.append(Variant(f"naive({float(lam):+.2f})", spec))
+                out.append(Variant(StrategyLabel.naive(lam).label, spec))
         elif name == "sto":
-            out.append(Variant("sto", StrategySpec("sto")))
+            out.append(Variant(StrategyLabel("sto").label, StrategySpec("sto")))
         elif name == "minimal" and minimal_fits:
-            out += [Variant(f"minimal({label})", StrategySpec("minimal", coeffs=tuple(c)))
+            out += [Variant(StrategyLabel.minimal(label).label,
+                            StrategySpec("minimal", coeffs=tuple(c)))
                     for label, c in minimal_fits]
         elif name == "minimal":
-            out.append(Variant("minimal", StrategySpec("minimal", coeffs=tuple(minimal))))
+            out.append(Variant(StrategyLabel.minimal().label,
+                               StrategySpec("minimal", coeffs=tuple(minimal))))
         elif name == "policy":
             if not policies:
                 raise ConfigError("compare.strategies has 'policy' but compare.policies is empty: "
                                   "allowed a list of run dirs, checkpoints or pretrained/NAME")
-            out += [Variant(f"policy({p})", StrategySpec("policy"), str(p)) for p in policies]
+            out += [Variant(StrategyLabel.policy(p).label, StrategySpec("policy"), str(p))
+                    for p in policies]
         else:
             raise ConfigError(f"compare.strategies has {name!r}: allowed one of {list(STRATEGIES)}")
     if not out:

@@ -1,10 +1,10 @@
 """Result records on disk: atomic JSON files, and the one Markdown / CSV table writer.
 
 ``metrics.json`` (``swimrl-eval``, ``swimrl-train``), ``comparison.json`` (``swimrl-compare``)
-and the other records are written with :func:`write_json` (``*.tmp`` then
-:func:`os.replace`; an existing record is never replaced unless asked; standard JSON only: a
-record holding NaN or an infinity is refused and nothing is written). Every table the
-commands print or write goes through :func:`markdown_table` / :func:`csv_table`.
+and the other records are written with :func:`write_json` (atomically:
+:func:`swimrl.atomic.atomic_write`; an existing record is never replaced unless asked; standard
+JSON only: a record holding NaN or an infinity is refused and nothing is written). Every table
+the commands print or write goes through :func:`markdown_table` / :func:`csv_table`.
 """
 
 from __future__ import annotations
@@ -18,7 +18,9 @@ from pathlib import Path
 
 import numpy as np
 
+from swimrl.atomic import atomic_write, atomic_write_text
 from swimrl.errors import NonFiniteError
+from swimrl.flows.labels import flow_display
 
 
 def refuse_overwrite(path: Path, overwrite: bool) -> None:
@@ -49,21 +51,13 @@ def write_json(record: dict, path: Path, overwrite: bool = True) -> Path:
     bad = nonfinite_entry(record)
     if bad is not None:
         raise NonFiniteError(f"{path} not written: {bad} is not finite")
-    tmp = path.with_suffix(path.suffix + ".tmp")
-    tmp.write_text(json.dumps(record, indent=2, allow_nan=False))
-    tmp.replace(path)
-    return path
+    return atomic_write_text(path, json.dumps(record, indent=2, allow_nan=False))
 
 
 def write_npz(data: dict, path: Path) -> Path:
     """Write the arrays ``data`` to ``path`` (``.npz``, compressed) atomically, making its
     directory."""
-    path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    tmp = path.with_name(path.name + ".tmp.npz")
-    np.savez_compressed(tmp, **data)
-    tmp.replace(path)
-    return path
+    return atomic_write(path, lambda fh: np.savez_compressed(fh, **data), make_dirs=True)
 
 
 def read_npz(path: Path) -> dict:
@@ -119,15 +113,11 @@ def flatten(d: dict, prefix: str = "") -> dict:
     return out
 
 
-def flow_label(flow: dict, sep: str = "=") -> str:
-    """``Ku=10`` for the stochastic flow, else the flow's name (from a record's config)."""
-    return f"Ku{sep}{flow['kubo']:g}" if flow["name"] == "stochastic" else flow["name"]
-
-
 def summary_line(m: dict) -> str:
     """One line: strategy, flow, R_hat +- SEM, size, time and speed."""
     return (
-        f"{m['strategy']} {flow_label(m['config']['flow'])}: R_hat = {m['R_hat_mean']:.4f} +- "
+        f"{m['strategy']} {flow_display(m['config']['flow'], '=')}: "
+        f"R_hat = {m['R_hat_mean']:.4f} +- "
         f"{m['R_hat_sem']:.4f} (SEM; std over flows {m['R_hat_std']:.4f}) over {m['n_flows']} "
         f"flows x {m['n_swimmers']} swimmers; {m['wall_s']:.1f} s, "
         f"{m['swimmer_substeps_per_s']:.3g} swimmer-substeps/s"
@@ -137,7 +127,7 @@ def summary_line(m: dict) -> str:
 def comparison_markdown(record: dict) -> str:
     """A ``comparison.json`` record as a Markdown table (paired ratios to the first row)."""
     first = record["rows"][0]["label"]
-    title = (f"{flow_label(record['config']['flow'], ' = ')}, {record['n_flows']} flows x "
+    title = (f"{flow_display(record['config']['flow'])}, {record['n_flows']} flows x "
              f"{record['n_swimmers']} swimmers, seed {record['seed']}\n\n")
     head = ["strategy", "R_hat (mean +- SEM)", "std over flows", f"ratio to {first} (paired)"]
     rows = [[r["label"], f"{r['R_hat_mean']:.4f} +- {r['R_hat_sem']:.4f}",
@@ -150,5 +140,5 @@ def write_comparison(record: dict, out: Path) -> str:
     """``comparison.json`` (atomic) and ``comparison.md`` in ``out``; returns the table."""
     write_json(record, Path(out) / "comparison.json")
     table = comparison_markdown(record)
-    (Path(out) / "comparison.md").write_text(table)
+    atomic_write_text(Path(out) / "comparison.md", table)
     return table

@@ -308,9 +308,3 @@ class StochasticFlow(GriddedFlow):
         noise = self._randn(self.n_flows, self.n_basis)
         self.coeffs.mul_(decay).add_(noise, alpha=sigma)
         self.time += dt
-
-
-def kubo_label(kubo: float) -> str:
-    """``0.1``, ``1``, ``10``, ``1e7``: the Kubo number as the shipped policies and records
-    name it (``%g`` without the exponent's ``+0``)."""
-    return f"{float(kubo):g}".replace("e+0", "e").replace("e+", "e")

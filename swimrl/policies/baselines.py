@@ -14,6 +14,7 @@ writing ``action`` (the shape factor ``Lambda``, shape ``(..., 1)``) within
 
 from __future__ import annotations
 
+import re
 from collections.abc import Sequence
 from dataclasses import dataclass
 
@@ -23,11 +24,13 @@ from torch import nn
 from torchrl.data import Bounded
 
 from swimrl.errors import as_float, one_of, require
+from swimrl.flows.labels import parse_ku_name
 from swimrl.physics.signals import SIGNAL_NAMES
 from swimrl.policies.networks import action_bounds
 
 N_R, N_THETA, S_NN, S_NP, OMEGA = range(len(SIGNAL_NAMES))  # positions in SIGNAL_NAMES
 STRATEGIES = ("naive", "sto", "minimal", "policy")
+_LABEL = re.compile(r"(\w+)\((.*)\)", re.DOTALL)
 
 
 class NaiveShape(nn.Module):
@@ -123,3 +126,69 @@ def build_strategy(spec: StrategySpec, action_spec: Bounded) -> TensorDictModule
     if spec.name == "minimal":
         return as_actor(MinimalModel(spec.coeffs, lam_max))
     raise ValueError(f"strategy {spec.name!r} is not a baseline (load a policy file instead)")
+
+
+@dataclass(frozen=True)
+class StrategyLabel:
+    """A strategy's label: ``NAME`` or ``NAME(ARG)``.
+
+    The rows of ``swimrl-compare`` (:meth:`naive`, :meth:`minimal`, :meth:`policy`):
+    ``sto``, ``naive(+0.98)`` (the shape factor, ``%+.2f``), ``minimal`` (the config's
+    coefficients) or ``minimal(FIT)`` (a fit's run directory), ``policy(SPEC)``; the actors
+    of the figures: ``naive`` (``Lambda = 0.98``), ``naive(0.98)``, ``sto``,
+    ``minimal(c1,c2,c3,c4)`` (:meth:`minimal_coeffs`) or a policy spec.
+    :meth:`parse` reads a label back (``StrategyLabel.parse(str(label)) == label`` where the
+    argument is not empty).
+    """
+
+    name: str
+    arg: str = ""
+
+    @property
+    def label(self) -> str:
+        """``name`` or ``name(arg)``."""
+        return f"{self.name}({self.arg})" if self.arg else self.name
+
+    def __str__(self) -> str:
+        return self.label
+
+    @classmethod
+    def parse(cls, text: str) -> StrategyLabel:
+        """``naive(+0.98)`` -> ``StrategyLabel("naive", "+0.98")``; text that is not
+        ``WORD(...)`` (``sto``, a policy spec) is the name."""
+        m = _LABEL.fullmatch(str(text))
+        return cls(m.group(1), m.group(2)) if m else cls(str(text))
+
+    @classmethod
+    def naive(cls, shape_factor: float) -> StrategyLabel:
+        """``naive(+0.98)``: a comparison's row of a constant shape factor."""
+        return cls("naive", f"{float(shape_factor):+.2f}")
+
+    @classmethod
+    def minimal(cls, fit: str = "") -> StrategyLabel:
+        """``minimal(FIT)`` (the fit's run directory), or ``minimal``: a comparison's row."""
+        return cls("minimal", str(fit))
+
+    @classmethod
+    def minimal_coeffs(cls, coeffs: Sequence[float]) -> StrategyLabel:
+        """``minimal(c1,c2,c3,c4)`` (``%.6g``): the minimal model with these coefficients."""
+        return cls("minimal", ",".join(f"{float(c):.6g}" for c in coeffs))
+
+    @classmethod
+    def policy(cls, spec: str) -> StrategyLabel:
+        """``policy(SPEC)``: a comparison's row of a trained policy."""
+        return cls("policy", str(spec))
+
+    @property
+    def numbers(self) -> tuple[float, ...]:
+        """The numbers of the argument: ``naive(+0.98)`` -> ``(0.98,)``,
+        ``minimal(1,0,0,0)`` -> ``(1.0, 0.0, 0.0, 0.0)``."""
+        return tuple(float(x) for x in self.arg.split(","))
+
+    @property
+    def kubo(self) -> float | None:
+        """The Ku a policy was trained or a minimal model fitted at, where the argument (or
+        a bare label) ends in a ``ku<number>`` path component (``policy(pretrained/ku10)``,
+        ``minimal(ku1e7)``); None otherwise (``policy(runs/ku10_seed0)``)."""
+        last = (self.arg or self.name).rstrip("/").rsplit("/", 1)[-1]
+        return parse_ku_name(last)

@@ -3,7 +3,7 @@ r"""Policy files: the format written by ``swimrl-train`` and the loader behind
 
 A run directory holds ``policy.pt`` (the final actor + metadata) and
 ``checkpoints/last.pt`` (the full training state, :mod:`swimrl.rl.checkpoint`); both are
-written atomically (``*.tmp`` then :func:`os.replace`) and hold tensors and plain containers
+written atomically (:func:`swimrl.atomic.atomic_write`) and hold tensors and plain containers
 only. ``SPEC`` is one of
 
 * a training run directory (its ``policy.pt``, else its ``checkpoints/last.pt``);
@@ -24,15 +24,16 @@ from __future__ import annotations
 
 import dataclasses
 import importlib.resources
-import os
 from pathlib import Path
 
 import torch
 import yaml
 from tensordict.nn import TensorDictModule
 
+from swimrl.atomic import atomic_write
 from swimrl.env import EnvParams
 from swimrl.errors import BadFileError, ConfigError
+from swimrl.flows.labels import parse_ku_name
 from swimrl.policies.networks import (
     NO_STD_BOUND,
     ModelSpec,
@@ -58,19 +59,6 @@ def checkpoint_path(run_dir: Path) -> Path:
 def policy_path(run_dir: Path) -> Path:
     """``<run>/policy.pt``."""
     return Path(run_dir) / "policy.pt"
-
-
-def atomic_save(obj, path: Path) -> Path:
-    """``torch.save`` to ``path.tmp``, flush to disk, then ``os.replace`` onto ``path``."""
-    path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    tmp = path.with_name(path.name + ".tmp")
-    with open(tmp, "wb") as fh:
-        torch.save(obj, fh)
-        fh.flush()
-        os.fsync(fh.fileno())
-    os.replace(tmp, path)
-    return path
 
 
 def load_file(path: Path, map_location="cpu") -> dict:
@@ -130,17 +118,16 @@ def policy_meta(params: EnvParams, model: ModelSpec, dtype: str) -> dict:
 
 
 def save_policy(path: Path, *, actor, counters: dict, config: dict, meta: dict) -> Path:
-    """Export the actor (all its parameters, incl. ``log sigma``) with its metadata."""
-    return atomic_save(
-        {
-            "format": POLICY_FORMAT,
-            "actor": actor.state_dict(),
-            "counters": dict(counters),
-            "config": config,
-            **meta,
-        },
-        path,
-    )
+    """Export the actor (all its parameters, incl. ``log sigma``) with its metadata
+    (``torch.save``, atomically, making the directory)."""
+    data = {
+        "format": POLICY_FORMAT,
+        "actor": actor.state_dict(),
+        "counters": dict(counters),
+        "config": config,
+        **meta,
+    }
+    return atomic_write(path, lambda fh: torch.save(data, fh), make_dirs=True)
 
 
 def available_pretrained(root: Path | None = None) -> list[str]:
@@ -149,15 +136,6 @@ def available_pretrained(root: Path | None = None) -> list[str]:
     if not root.is_dir():
         return []
     return sorted(d.name for d in root.iterdir() if d.is_dir() and _policy_file(d) is not None)
-
-
-def _kubo_value(name: str) -> float | None:
-    if not name.lower().startswith("ku"):
-        return None
-    try:
-        return float(name[2:])
-    except ValueError:
-        return None
 
 
 def _policy_file(directory: Path) -> Path | None:
@@ -174,8 +152,9 @@ def resolve_policy_file(spec: str) -> Path:
         name = spec[len(PRETRAINED_PREFIX) :].strip("/")
         names = available_pretrained()
         match = name if name in names else None
-        if match is None and _kubo_value(name) is not None:
-            match = next((n for n in names if _kubo_value(n) == _kubo_value(name)), None)
+        kubo = parse_ku_name(name)
+        if match is None and kubo is not None:
+            match = next((n for n in names if parse_ku_name(n) == kubo), None)
         if match is None:
             have = ", ".join(names) if names else "none installed yet"
             raise FileNotFoundError(

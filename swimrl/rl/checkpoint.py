@@ -12,10 +12,11 @@ Layout of a run directory::
 (torch CPU [+ CUDA] global generator, which drives action sampling and minibatch
 shuffling, and the environment's generator, which drives flows and initial conditions),
 the counters (frames, updates, episodes, wall time), the resolved config, the signal
-names, the env parameters and the network shape. Files are written to ``*.tmp`` and moved
-with :func:`os.replace`, so a kill at any moment (even ``kill -9``) leaves either the
-previous or the new checkpoint, never a truncated one. The previous ``last.pt`` is kept as
-``prev.pt`` (a hard link made before the replacement, so ``last.pt`` always exists): a
+names, the env parameters and the network shape. Files are written atomically
+(:func:`swimrl.atomic.atomic_write`: a temporary file, ``fsync``, :func:`os.replace`), so a
+kill at any moment (even ``kill -9``) leaves either the previous or the new checkpoint, never
+a truncated one. The previous ``last.pt`` is kept as ``prev.pt`` (a hard link made before the
+replacement, so ``last.pt`` always exists): a
 ``last.pt`` damaged later (a full disk, a copy cut short) is reported by path and the run
 resumes from ``prev.pt`` (:func:`load_checkpoint`).
 """
@@ -28,8 +29,9 @@ from pathlib import Path
 
 import torch
 
+from swimrl.atomic import atomic_write, temp_path
 from swimrl.errors import BadFileError
-from swimrl.policies.files import CHECKPOINT_FORMAT, atomic_save, checkpoint_path, load_file
+from swimrl.policies.files import CHECKPOINT_FORMAT, checkpoint_path, load_file
 from swimrl.policies.networks import NO_STD_BOUND
 
 log = logging.getLogger(__name__)
@@ -122,24 +124,23 @@ def save_checkpoint(
     """Write the full training state atomically; the previous ``path`` becomes ``prev.pt``."""
     path = Path(path)
     if path.exists():
-        prev, tmp = previous_path(path), path.with_name("prev.pt.tmp")
+        prev = previous_path(path)
+        tmp = temp_path(prev)
         tmp.unlink(missing_ok=True)
         os.link(path, tmp)
         os.replace(tmp, prev)
-    return atomic_save(
-        {
-            "format": CHECKPOINT_FORMAT,
-            "actor": actor.state_dict(),
-            "critic": critic.state_dict(),
-            "optimizers": [o.state_dict() for o in optimizers],
-            "schedulers": [s.state_dict() for s in schedulers],
-            "rng": rng,
-            "counters": dict(counters),
-            "config": config,
-            **meta,
-        },
-        path,
-    )
+    data = {
+        "format": CHECKPOINT_FORMAT,
+        "actor": actor.state_dict(),
+        "critic": critic.state_dict(),
+        "optimizers": [o.state_dict() for o in optimizers],
+        "schedulers": [s.state_dict() for s in schedulers],
+        "rng": rng,
+        "counters": dict(counters),
+        "config": config,
+        **meta,
+    }
+    return atomic_write(path, lambda fh: torch.save(data, fh), make_dirs=True)
 
 
 def previous_path(last: Path) -> Path:

@@ -7,19 +7,20 @@ from a fresh clone without the event files; a run resumed from such a committed 
 checkpoint and ``curves.csv``, no event files) passes the CSV's rows up to its checkpoint as
 ``base`` to :func:`write_curves`, so its curve stays whole.
 
-    python -m swimrl.rl.curves RUN_DIR [--out RUN_DIR/curves.csv]
+    swimrl-curves RUN_DIR [--out RUN_DIR/curves.csv]     # or: python -m swimrl.rl.curves
 """
 
 from __future__ import annotations
 
 import argparse
 import csv
+import io
 import math
-import os
 from pathlib import Path
 
 import numpy as np
 
+from swimrl.atomic import atomic_write_text
 from swimrl.evaluation.records import read_curves
 
 #: Tags exported by default (see the monitoring table of docs/training.md).
@@ -73,16 +74,14 @@ def write_curves(run_dir: Path, out: Path | None = None, tags=CURVE_TAGS,
     gone; a step in both keeps the event files' row)."""
     out = Path(out) if out is not None else Path(run_dir) / "curves.csv"
     rows = {**(base or {}), **read_scalars(Path(run_dir), tags)}
-    tmp = out.with_suffix(out.suffix + ".tmp")
-    with open(tmp, "w", newline="") as fh:
-        w = csv.writer(fh)
-        w.writerow(["frames", *tags])
-        for step in sorted(rows):
-            vals = [rows[step].get(t) for t in tags]
-            w.writerow([step] + ["" if v is None or not math.isfinite(v) else f"{v:.6g}"
-                                 for v in vals])
-    os.replace(tmp, out)
-    return out
+    buf = io.StringIO(newline="")
+    w = csv.writer(buf)
+    w.writerow(["frames", *tags])
+    for step in sorted(rows):
+        vals = [rows[step].get(t) for t in tags]
+        w.writerow([step] + ["" if v is None or not math.isfinite(v) else f"{v:.6g}"
+                             for v in vals])
+    return atomic_write_text(out, buf.getvalue())
 
 
 def main() -> None:

@@ -19,6 +19,9 @@ from swimrl.analysis.signal_ablation import (
     read_ablation,
     summarise_sets,
 )
+from swimrl.atomic import atomic_write_text
+from swimrl.flows.labels import ku_display, ku_number
+from swimrl.policies.baselines import StrategyLabel
 
 from .records import FiguresConfig, eval_setup, flow_stats, per_flow_record, smart_policy
 from .style import COLORS, save, shown
@@ -34,9 +37,9 @@ def read_fits(root: Path) -> dict[float, dict]:
 
 
 def minimal_name(fit: dict) -> str:
-    """Actor name of the minimal model with a fit's coefficients."""
+    """Actor name of the minimal model with a fit's coefficients (``minimal(c1,c2,c3,c4)``)."""
     c = fit["coefficients"]
-    return "minimal(" + ",".join(f"{c[k]:.6g}" for k in ("c1", "c2", "c3", "c4")) + ")"
+    return StrategyLabel.minimal_coeffs([c[k] for k in ("c1", "c2", "c3", "c4")]).label
 
 
 def _draw_minimal(b, c, kus: np.ndarray, r: dict[str, np.ndarray], err: dict[str, np.ndarray],
@@ -82,7 +85,7 @@ def fig_ablation(kus: np.ndarray, r: dict[str, np.ndarray], err: dict[str, np.nd
         out["curves_last"] = draw_curves(a2, runs, summary)
         out["table"] = ablation_markdown(runs, summary)
         kubo, frames = runs[0].kubo, runs[0].frames
-        a.set_title(f"(a) signal ablation, Ku = {kubo:g}, {frames / 1e6:g}M frames per run",
+        a.set_title(f"(a) signal ablation, {ku_display(kubo)}, {frames / 1e6:g}M frames per run",
                     fontsize=9)
         a2.set_title("(a') the runs' held-out curves (mean, band: std over seeds)", fontsize=9)
     else:
@@ -111,7 +114,7 @@ def build_ablation(cfg: FiguresConfig) -> dict:
     for kubo, fit in fits.items():
         setup = eval_setup(cfg, kubo, cfg.robust_flows, cfg.robust_swimmers)
         actors = [smart_policy(cfg, kubo), minimal_name(fit), "sto"]
-        per.append(per_flow_record(cfg, f"minimal_ku{kubo:g}", setup, actors))
+        per.append(per_flow_record(cfg, f"minimal_ku{ku_number(kubo)}", setup, actors))
     r, err = flow_stats(np.stack(per), names)  # per: (Ku, 3, F)
     keys = ("c1", "c2", "c3", "c4")
     coeffs = {k: np.array([f["coefficients"][k] for f in fits.values()]) for k in keys}
@@ -134,5 +137,5 @@ def build_ablation(cfg: FiguresConfig) -> dict:
         f"bars: std over flows; (c) fits on {'/'.join(map(str, sorted(n_fit)))} flows x 100 "
         "swimmers, bars: SEM over flows", runs=runs)
     if "table" in drawn:
-        (cfg.out / "ablation_signals.md").write_text(drawn["table"])
+        atomic_write_text(cfg.out / "ablation_signals.md", drawn["table"])
     return drawn

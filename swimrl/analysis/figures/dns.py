@@ -32,18 +32,19 @@ from __future__ import annotations
 import dataclasses
 import json
 import math
-import re
 from pathlib import Path
 
 import numpy as np
 
 from swimrl.analysis.plots import pyplot
 from swimrl.analysis.policy_maps import lambda_maps
+from swimrl.atomic import atomic_write_text
 from swimrl.evaluation.records import markdown_table, read_curves, read_npz, write_npz
 from swimrl.evaluation.rollout import EvalSetup, EvalSizes
 from swimrl.evaluation.statistics import paired_ratio
 from swimrl.flows.build import StoredRunSpec
 from swimrl.flows.dns.store import store_status
+from swimrl.policies.baselines import StrategyLabel
 from swimrl.policies.files import resolve_policy_file
 
 from .records import FRAME_EVERY, DNSFiguresConfig, FiguresConfig, record_strategies
@@ -53,8 +54,6 @@ from .style import COLORS, LABEL, save
 GLYPH_ASPECT_MAX = 4.0
 #: The paper's colours of Fig. dnsFlow(b).
 PDF_COLOURS = {"omega": "tab:blue", "S_xx": "tab:green", "S_xy": "tab:red"}
-#: ``ku<number>`` at the end of a policy or fit label: the Ku it was trained or fitted at.
-KU_LABEL = re.compile(r"(?:^|/)ku((?:\d+\.?\d*|\.\d+)(?:e[+-]?\d+)?)$")
 
 
 def spheroid_aspect(shape_factor: np.ndarray) -> np.ndarray:
@@ -198,14 +197,6 @@ def transfer_markdown(summary: dict[str, dict]) -> str:
     return markdown_table(head, rows)
 
 
-def ku_of(label: str) -> float | None:
-    """Ku of ``policy(.../ku10)`` or ``minimal(ku1e7)`` (the label ends in ``ku<number>``);
-    None for other labels."""
-    inner = label[label.find("(") + 1:].removesuffix(")").rstrip("/")
-    m = KU_LABEL.search(inner)
-    return float(m.group(1)) if m else None
-
-
 # -- the figure ----------------------------------------------------------------------------------
 def _glyphs(ax, path: np.ndarray, theta: np.ndarray, lam: np.ndarray, every: int,
             size: float) -> int:
@@ -301,7 +292,7 @@ def fig_dns_flow(rec: dict | None, pdfs: dict | None, transfer: dict[str, dict] 
         b.text(0.5, 0.5, "no pooled PDFs (swimrl-dns-plots)", ha="center", transform=b.transAxes)
     b.set_title("(b) gradient PDFs, pooled over the stored runs", fontsize=8)
     if transfer:
-        drawn["c"] = _draw_transfer(c, transfer, f"policy({dns_trained})")
+        drawn["c"] = _draw_transfer(c, transfer, StrategyLabel.policy(dns_trained).label)
     else:
         c.text(0.5, 0.5, "no transfer records", ha="center", transform=c.transAxes)
     fig.suptitle(title, fontsize=8)
@@ -314,12 +305,13 @@ def _draw_transfer(ax, summary: dict[str, dict], dns_label: str) -> dict:
     series: dict[str, list[tuple[float, float, float]]] = {"smart": [], "minimal": []}
     lines, other = {}, []
     for label, s in summary.items():
-        ku = ku_of(label)
+        parsed = StrategyLabel.parse(label)
+        name, ku = parsed.name, parsed.kubo
         err = s["ratio_realisation_std"]
-        if ku is not None and label.startswith(("policy", "minimal")):
-            kind = "minimal" if label.startswith("minimal") else "smart"
+        if ku is not None and name in ("policy", "minimal"):
+            kind = "minimal" if name == "minimal" else "smart"
             series[kind].append((ku, s["ratio"], 0.0 if math.isnan(err) else err))
-        elif label == dns_label or label.startswith(("naive", "minimal")):
+        elif label == dns_label or name in ("naive", "minimal"):
             lines[label] = s
         elif label != "sto":
             other.append(label)
@@ -375,7 +367,7 @@ def build_dns_flow(cfg: FiguresConfig) -> dict:
                        dns.glyph_every, title, dns.trained, curve)
     if summary:
         out["transfer"] = summary
-        (cfg.out / "dnsFlow_transfer.md").write_text(transfer_markdown(summary))
+        atomic_write_text(cfg.out / "dnsFlow_transfer.md", transfer_markdown(summary))
     missing = [why] if why else []
     missing += [f"no pooled_pdfs in {dns.checks}"] if not pdfs else []
     missing += [f"no comparison.json under {dns.transfer}"] if not summary else []

@@ -15,8 +15,9 @@ from swimrl.analysis.policy_maps import (
     snn_extremes,
     symmetric_range,
 )
+from swimrl.flows.labels import ku_display
 
-from .records import KUS, STRATEGIES, FiguresConfig, ku_record
+from .records import KUS, RECORD_STRATEGIES, FiguresConfig, ku_record
 from .style import COLORS, LABEL, save, sizes_title
 
 
@@ -27,7 +28,7 @@ def fig_ku01(traj: np.ndarray, smart_sig: np.ndarray, smart_lam: np.ndarray,
     ``n_theta S_np`` for smart and STO; inset: smart's ``<Lambda | n_theta, S_np>``."""
     plt = pyplot()
     fig, (a, b) = plt.subplots(1, 2, figsize=(11, 4.6))
-    for j, name in enumerate(STRATEGIES):
+    for j, name in enumerate(RECORD_STRATEGIES):
         for i, x in enumerate(traj[j]):
             a.plot(x[:, 0], x[:, 1], color=COLORS[name], lw=0.8, label=name if i == 0 else None)
     a.plot(0, 0, "r*", ms=10)
@@ -135,7 +136,7 @@ def fig_ku_pattern(records: dict[float, tuple[np.ndarray, np.ndarray]], path: Pa
             a.set_xlabel(LABEL["S_np"])
             a.set_ylabel(LABEL[other])
             a.set_title(f"({'abcdefgh'[row * 4 + i] if len(kus) == 4 else ''}) "
-                        f"Ku = {kubo:g}", fontsize=9)
+                        f"{ku_display(kubo)}", fontsize=9)
             out[(kubo, other)] = mean
     fig.colorbar(im, ax=axes, shrink=0.6, label=r"$\langle\Lambda\rangle$")
     fig.suptitle(title, fontsize=8)

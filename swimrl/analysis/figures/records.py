@@ -5,7 +5,8 @@ Evaluations go through the one rollout loop with a
 :class:`~swimrl.evaluation.trajectories.TrajectoryRecorder`; their arrays are cached under
 ``cache/`` as ``.npz`` files keyed by a hash of their inputs (the setup, the policy file's
 bytes, :data:`CACHE_VERSION`), so a second build only draws. Every record holds the
-strategies in the order of :data:`STRATEGIES` (smart, naive, STO) along its first axis.
+strategies in the order of :data:`RECORD_STRATEGIES` (smart, naive, STO) along its first
+axis.
 
 Units: lengths in ``l_f``, times in ``tau_K``, signals in ``tau_K`` units.
 """
@@ -25,8 +26,8 @@ from swimrl.evaluation.records import read_npz, write_npz
 from swimrl.evaluation.rollout import EvalSetup, EvalSizes, chunk_seed, evaluate_shared
 from swimrl.evaluation.trajectories import TrajectoryRecorder
 from swimrl.flows.build import StochasticSpec
-from swimrl.flows.stochastic import kubo_label
-from swimrl.policies.baselines import StrategySpec
+from swimrl.flows.labels import ku_display, ku_name
+from swimrl.policies.baselines import StrategyLabel, StrategySpec
 from swimrl.policies.files import load_policy, resolve_policy_file
 from swimrl.runtime import Runtime
 
@@ -38,12 +39,9 @@ CACHE_VERSION = 1
 KUS = (0.1, 1.0, 10.0, 1e7)
 #: Decisions between video frames (4 tau_K at T_u = 0.1 tau_K: 51 frames over T = 200 tau_K).
 FRAME_EVERY = 40
-STRATEGIES = ("smart", "naive", "STO")
-
-
-def ku_name(kubo: float) -> str:
-    """``ku0.1``, ``ku1``, ``ku10``, ``ku1e7``: the shipped policies' names."""
-    return "ku" + kubo_label(kubo)
+#: The strategies of a record (:func:`ku_record`), in the order of its first axis, by the
+#: names the figures show (the keys of :data:`~swimrl.analysis.figures.style.COLORS`).
+RECORD_STRATEGIES = ("smart", "naive", "STO")
 
 
 @dataclass(frozen=True)
@@ -153,16 +151,16 @@ def cache_inputs(cfg: FiguresConfig, setup: EvalSetup, actors: list[str]) -> dic
 
 
 def actor(name: str, params: EnvParams):
-    """The strategy of an actor name: ``naive`` (``Lambda = 0.98``), ``sto``, ``naive(L)``,
-    ``minimal(c1,c2,c3,c4)``, or a policy spec (loaded)."""
-    if name == "naive":
-        return StrategySpec("naive", shape_factor=0.98)
-    if name == "sto":
+    """The strategy of an actor name (a :class:`~swimrl.policies.baselines.StrategyLabel`):
+    ``naive`` (``Lambda = 0.98``), ``sto``, ``naive(L)``, ``minimal(c1,c2,c3,c4)``, or a
+    policy spec (loaded)."""
+    label = StrategyLabel.parse(name)
+    if label.name == "naive":
+        return StrategySpec("naive", shape_factor=label.numbers[0] if label.arg else 0.98)
+    if label == StrategyLabel("sto"):
         return StrategySpec("sto")
-    if name.startswith("naive("):
-        return StrategySpec("naive", shape_factor=float(name[6:-1]))
-    if name.startswith("minimal("):
-        return StrategySpec("minimal", coeffs=tuple(float(c) for c in name[8:-1].split(",")))
+    if label.name == "minimal" and label.arg:
+        return StrategySpec("minimal", coeffs=label.numbers)
     return load_policy(name, params)
 
 
@@ -187,7 +185,7 @@ def ku_record(cfg: FiguresConfig, kubo: float) -> dict[str, np.ndarray]:
     actors = [smart_policy(cfg, kubo), "naive", "sto"]
 
     def compute() -> dict[str, np.ndarray]:
-        a = record_strategies(setup, actors, f"Ku={kubo:g}", FRAME_EVERY)
+        a = record_strategies(setup, actors, ku_display(kubo, "="), FRAME_EVERY)
         disp = a["position"] - a["position"][..., :1, :]  # (F, K, S, N+1, 2)
         per = np.swapaxes(disp, 0, 1)  # (K, F, S, N+1, 2)
         k, f, s = per.shape[:3]
@@ -230,7 +228,7 @@ def per_flow_record(cfg: FiguresConfig, name: str, setup: EvalSetup,
     return cached(cfg, name, cache_inputs(cfg, setup, actors), compute)["per_flow"]
 
 
-def flow_stats(per: np.ndarray, names: tuple[str, ...] = STRATEGIES) -> tuple[dict, dict]:
+def flow_stats(per: np.ndarray, names: tuple[str, ...] = RECORD_STRATEGIES) -> tuple[dict, dict]:
     """Mean and std over flows (last axis) of ``per`` ``(..., len(names), F)``, by name."""
     mean = {n: per[:, j].mean(-1) for j, n in enumerate(names)}
     std = {n: per[:, j].std(-1, ddof=1) if per.shape[-1] > 1 else 0 * per[:, j, 0]

@@ -11,7 +11,7 @@ import numpy as np
 from swimrl.analysis.plots import pyplot
 
 from .records import (
-    STRATEGIES,
+    RECORD_STRATEGIES,
     FiguresConfig,
     eval_setup,
     flow_stats,
@@ -24,7 +24,7 @@ from .style import COLORS, save, sizes_title
 def _draw_sweep(ax, x: np.ndarray, r: dict[str, np.ndarray], err: dict[str, np.ndarray],
                 xlabel: str, reference: tuple[np.ndarray, np.ndarray] | None = None) -> None:
     """R_hat of the strategies against a swept parameter on ``ax`` (log x, ticks at ``x``)."""
-    for name in STRATEGIES:
+    for name in RECORD_STRATEGIES:
         ax.errorbar(x, r[name], yerr=err[name], color=COLORS[name], marker="o", capsize=3,
                     label=name)
     if reference is not None:

@@ -12,10 +12,12 @@ import numpy as np
 from swimrl.analysis.performance import load, summarise
 from swimrl.analysis.plots import pyplot
 from swimrl.evaluation.rollout import EvalSizes
+from swimrl.flows.labels import ku_display
+from swimrl.policies.baselines import StrategyLabel
 
 from .records import (
     KUS,
-    STRATEGIES,
+    RECORD_STRATEGIES,
     FiguresConfig,
     cache_inputs,
     cached,
@@ -64,7 +66,7 @@ def fig_swimmer(vorticity: np.ndarray, box: float, traj: dict[str, np.ndarray], 
 def build_swimmer(cfg: FiguresConfig) -> dict:
     """Lambda = +0.98 and -0.98 from one point in a frozen flow (Ku = 1e7), 20 tau_K."""
     setup = replace(eval_setup(cfg, 1e7, 1, 1, duration=20.0), sizes=EvalSizes(1, 1, 1, False, 1))
-    actors = ["naive(0.98)", "naive(-0.98)"]
+    actors = [StrategyLabel("naive", f"{lam:g}").label for lam in (0.98, -0.98)]
 
     def compute() -> dict[str, np.ndarray]:
         # one evaluation each on the same seed: same flow, same initial point (CRN)
@@ -111,12 +113,12 @@ def fig_smart_performance(summaries: list[dict], finals: dict[float, np.ndarray]
     out["spread"] = {}
     for i, (kubo, final) in enumerate(sorted(finals.items())):
         a = fig.add_subplot(gs[i + 1])
-        for j, name in enumerate(STRATEGIES):
+        for j, name in enumerate(RECORD_STRATEGIES):
             a.scatter(final[j, :, 0], final[j, :, 1], s=2, color=COLORS[name], alpha=0.5,
                       label=name, rasterized=True)
         a.plot(0, 0, "r*", ms=10)
         a.set_aspect("equal")
-        a.set_title(f"({'bcde'[i] if i < 4 else '?'}) Ku = {kubo:g}", fontsize=9)
+        a.set_title(f"({'bcde'[i] if i < 4 else '?'}) {ku_display(kubo)}", fontsize=9)
         a.set_xlabel(r"$\Delta x/\ell_f$")
         if i == 0:
             a.set_ylabel(r"$\Delta y/\ell_f$")

@@ -13,6 +13,7 @@ import numpy as np
 from swimrl.analysis.plots import pyplot
 from swimrl.analysis.training_curves import PAPER_EPISODE_FRAMES, draw_curve
 from swimrl.evaluation.records import read_curves
+from swimrl.flows.labels import ku_display, parse_ku_name
 
 from .records import FiguresConfig
 from .style import save, shown
@@ -26,14 +27,6 @@ def find_curves(root: Path) -> dict[str, Path]:
     return {p.parent.name: p for p in sorted(found)}
 
 
-def ku_value(group: str) -> float:
-    """``"ku1e7"`` -> 1e7 (``inf`` where the group is not ``ku<number>``)."""
-    try:
-        return float(group.removeprefix("ku"))
-    except ValueError:
-        return math.inf
-
-
 def fig_training_curves(curves: dict[str, dict[str, np.ndarray]], path: Path,
                         title: str = "") -> dict:
     """Held-out ``eval/R_hat`` (+- SEM band where recorded) against training episodes in the
@@ -43,7 +36,8 @@ def fig_training_curves(curves: dict[str, dict[str, np.ndarray]], path: Path,
     groups: dict[str, list[str]] = {}
     for label in curves:
         groups.setdefault(label.split("_")[0], []).append(label)
-    order = sorted(groups, key=lambda g: (ku_value(g), g))
+    kus = {g: parse_ku_name(g) for g in groups}  # None where the group is not ku<number>
+    order = sorted(groups, key=lambda g: (math.inf if kus[g] is None else kus[g], g))
     fig, axes = plt.subplots(1, max(1, len(order)), figsize=(3.6 * max(1, len(order)), 3.4),
                              squeeze=False)
     out = {}
@@ -54,8 +48,7 @@ def fig_training_curves(curves: dict[str, dict[str, np.ndarray]], path: Path,
             out[label] = float(y[-1])
         a.set_xlabel("training episodes (of $2\\times10^4$ frames)")
         a.set_ylabel(r"held-out $\hat R$")
-        kv = ku_value(ku)
-        a.set_title(f"Ku = {kv:g}" if math.isfinite(kv) else ku, fontsize=9)
+        a.set_title(ku if kus[ku] is None else ku_display(kus[ku]), fontsize=9)
         a.legend(fontsize=7)
     fig.suptitle(title, fontsize=8)
     fig.tight_layout()

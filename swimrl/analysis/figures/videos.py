@@ -18,9 +18,10 @@ from pathlib import Path
 import numpy as np
 
 from swimrl.analysis.plots import pyplot
+from swimrl.flows.labels import flow_display, ku_name
 
 from .dns import dns_record
-from .records import KUS, STRATEGIES, FiguresConfig, ku_name, ku_record
+from .records import KUS, RECORD_STRATEGIES, FiguresConfig, ku_record
 from .style import COLORS
 
 
@@ -39,7 +40,7 @@ def _distance_inset(fig, ax, t: np.ndarray, dist: np.ndarray, unit: str):
     """Inset of ``dist`` ``(3, frames)`` against ``t``; returns the moving markers."""
     ins = ax.inset_axes([0.02, 0.72, 0.28, 0.26])
     marks = []
-    for j, name in enumerate(STRATEGIES):
+    for j, name in enumerate(RECORD_STRATEGIES):
         ins.plot(t, dist[j], color=COLORS[name], lw=1)
         (m,) = ins.plot(t[:1], dist[j, :1], "o", color=COLORS[name], ms=3)
         marks.append(m)
@@ -48,10 +49,6 @@ def _distance_inset(fig, ax, t: np.ndarray, dist: np.ndarray, unit: str):
     ins.tick_params(labelsize=5)
     ins.patch.set_alpha(0.85)
     return marks
-
-
-def _flow_label(flow: float | str) -> str:
-    return flow if isinstance(flow, str) else f"Ku = {flow:g}"
 
 
 def video_trajectories(rec: dict, flow: float | str, path: Path, fps: int = 8,
@@ -75,7 +72,7 @@ def video_trajectories(rec: dict, flow: float | str, path: Path, fps: int = 8,
     im = ax.imshow(np.tile(vort[0], (reps[1], reps[0])), origin="lower", extent=extent,
                    cmap="RdBu_r", vmin=-vmax, vmax=vmax, interpolation="nearest")
     lines = [[ax.plot([], [], color=COLORS[name], lw=1.2, label=name if i == 0 else None)[0]
-              for i in range(traj.shape[1])] for name in STRATEGIES]
+              for i in range(traj.shape[1])] for name in RECORD_STRATEGIES]
     ax.plot(traj[:, :, 0, 0].ravel(), traj[:, :, 0, 1].ravel(), "r*", ms=5)  # own starts
     ax.set_xlim(lo[0], hi[0])
     ax.set_ylim(lo[1], hi[1])
@@ -94,7 +91,7 @@ def video_trajectories(rec: dict, flow: float | str, path: Path, fps: int = 8,
             for i, line in enumerate(row):
                 line.set_data(traj[j, i, : f + 1, 0], traj[j, i, : f + 1, 1])
             marks[j].set_data(t[f: f + 1], dist[j, f: f + 1])
-        title.set_text(f"{_flow_label(flow)}, t = {t[f]:.0f} $\\tau_K$")
+        title.set_text(f"{flow_display(flow)}, t = {t[f]:.0f} $\\tau_K$")
 
     _save(fig, FuncAnimation(fig, frame, frames=n), path, fps)
     return {"frames": n, "extent": extent, "distance": dist[:, -1].tolist()}
@@ -114,7 +111,7 @@ def video_cloud(rec: dict, flow: float | str, path: Path, fps: int = 8,
     r = float(np.abs(cloud).max()) * 1.05 + 1e-9
     fig, ax = plt.subplots(figsize=(5.6, 5.6))
     dots = [ax.plot([], [], ".", ms=2, color=COLORS[name], alpha=0.6, label=name)[0]
-            for name in STRATEGIES]
+            for name in RECORD_STRATEGIES]
     ax.plot(0, 0, "r*", ms=8)
     ax.set_xlim(-r, r)
     ax.set_ylim(-r, r)
@@ -130,7 +127,7 @@ def video_cloud(rec: dict, flow: float | str, path: Path, fps: int = 8,
         for j, d in enumerate(dots):
             d.set_data(cloud[j, :, f, 0], cloud[j, :, f, 1])
             marks[j].set_data(t[f: f + 1], dist[j, f: f + 1])
-        title.set_text(f"{_flow_label(flow)}, {cloud.shape[1]} swimmers per strategy, "
+        title.set_text(f"{flow_display(flow)}, {cloud.shape[1]} swimmers per strategy, "
                        f"t = {t[f]:.0f} $\\tau_K$")
 
     _save(fig, FuncAnimation(fig, frame, frames=n), path, fps)

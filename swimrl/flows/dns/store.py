@@ -273,10 +273,6 @@ class DNSStoreWriter:
                                         f"checkpoint/{rng_name} of step {step}", advice=again))
         return w, rng
 
-    def has_checkpoint(self) -> bool:
-        """Whether a solver state has been checkpointed (committed)."""
-        return self.checkpoint_version >= 0
-
     def commit(self, **attrs: Any) -> None:
         """Make appended data part of the run: update ``n_written``/``n_diag`` and ``attrs``."""
         self.group.attrs.update({**attrs, "n_written": self._pending_written,
