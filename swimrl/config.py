@@ -1,27 +1,36 @@
 """The only module that reads a Hydra config: each command's ``DictConfig`` -> typed objects.
 
-Every ``*_config`` function maps the config keys onto the typed objects of the library
+Every ``*_config`` function only maps the config keys onto the typed objects of the library
 (:class:`~swimrl.env.EnvParams`, :class:`~swimrl.flows.build.StochasticSpec`,
-:class:`~swimrl.rl.plan.TrainSettings`, ...), whose constructors check every value and raise
+:class:`~swimrl.rl.plan.TrainSettings`, ...); their constructors check every value and raise
 one :class:`~swimrl.errors.ConfigError` naming the key, the value and the allowed range. A
 command therefore validates its whole config once, before any compute, and the library
 never sees a ``DictConfig``. ``record`` (the resolved config as plain containers) goes into
 the result files.
+
+One mapping: :func:`from_node` builds a dataclass from the config groups that hold its
+fields, by field name, each number converted to the type its field declares; the fields
+named otherwise in the yaml (``spinup.time`` -> ``spinup_time``) or built from several keys
+are passed to it. Every key is read as it is: the yaml holds every value that runs (a
+dataclass default is the yaml's value, ``tests/test_config_sources.py``), and the keys an old
+checkpoint lacks are upgraded in :mod:`swimrl.rl.checkpoint`, not here.
 """
 
 from __future__ import annotations
 
 import dataclasses
 import math
+import typing
+from collections.abc import Mapping
 from pathlib import Path
 
 from omegaconf import DictConfig, ListConfig, OmegaConf
 
-from swimrl.analysis.figures.records import FIGURES, DNSFiguresConfig, FiguresConfig
+from swimrl.analysis.figures.records import DNSFiguresConfig, FiguresConfig
 from swimrl.analysis.fit_minimal import FitConfig, read_coefficients
 from swimrl.analysis.gain_scan import GainScanConfig
 from swimrl.env import EnvParams
-from swimrl.errors import as_bool, as_float, as_int, one_of
+from swimrl.errors import ConfigError, number_type, one_of
 from swimrl.evaluation.compare import CompareConfig, strategy_variants
 from swimrl.evaluation.rollout import EvalConfig, EvalSetup, EvalSizes
 from swimrl.flows.build import (
@@ -42,13 +51,16 @@ from swimrl.runtime import Runtime
 
 #: ``${flow_tag:${flow}}`` -> ``ku10.0`` for the stochastic flow, else its name (run directories)
 OmegaConf.register_new_resolver(
-    "flow_tag", lambda flow: flow_tag(flow.name, flow.get("kubo")), replace=True)
+    "flow_tag",
+    lambda flow: flow_tag(flow.name, flow.kubo if flow.name == "stochastic" else None),
+    replace=True)
 #: ``${ku:${flow.kubo}}`` -> ``0.1``, ``1``, ``10``, ``1e7`` (names of policies and records per Ku)
 OmegaConf.register_new_resolver("ku", kubo_label, replace=True)
 
 
 def _int(value):
-    """``value`` as an int when it is a whole number (else unchanged, for the check to name)."""
+    """``value`` as an int when it is a whole number (else unchanged, for the check to name;
+    None stays None)."""
     if isinstance(value, bool):
         return value
     try:
@@ -68,8 +80,33 @@ def _float(value):
         return value
 
 
-def _optional(value, convert):
-    return None if value is None else convert(value)
+def _typed(value, hint):
+    """``value`` as the field annotation ``hint`` declares: ints and floats (optional ones,
+    tuples of them) converted where they are numbers, anything else as it is."""
+    kind, is_tuple = number_type(hint)
+    if value is None or kind is None:
+        return tuple(value) if is_tuple and value is not None else value
+    convert = _int if kind is int else _float
+    return tuple(convert(v) for v in value) if is_tuple else convert(value)
+
+
+def from_node(cls, groups: Mapping[str, DictConfig], **given):
+    """The dataclass ``cls`` from the config ``groups`` (``{"train.": cfg.train}``; the key
+    prefix names the group in messages): each constructor field not in ``given`` is read from
+    the first group holding a key of its name, converted as its annotation says
+    (:func:`_typed`); ``given`` fields are passed as they are. A field no group holds is a
+    :class:`~swimrl.errors.ConfigError` (the yaml shows every value)."""
+    hints = typing.get_type_hints(cls)
+    values = dict(given)
+    for f in dataclasses.fields(cls):
+        if not f.init or f.name in given:
+            continue
+        group = next((g for g in groups.values() if f.name in g), None)
+        if group is None:
+            keys = " or ".join(f"{prefix}{f.name}" for prefix in groups)
+            raise ConfigError(f"{keys} is missing: allowed a config that holds it")
+        values[f.name] = _typed(group[f.name], hints[f.name])
+    return cls(**values)
 
 
 def record_of(cfg: DictConfig) -> dict:
@@ -81,82 +118,47 @@ def record_of(cfg: DictConfig) -> dict:
 
 def runtime(cfg: DictConfig) -> Runtime:
     """``device``, ``dtype``, ``threads``, ``kernel``."""
-    return Runtime.from_names(
-        cfg.device, cfg.dtype, _optional(cfg.get("threads"), _int), cfg.get("kernel", "auto")
-    )
+    return Runtime.from_names(cfg.device, cfg.dtype, _int(cfg.threads), cfg.kernel)
 
 
 def env_params(cfg: DictConfig) -> EnvParams:
     """``swimmer.*``, ``episode.*`` and ``signals.names``."""
-    return EnvParams(
-        swim_speed=_float(cfg.swimmer.swim_speed),
-        rot_diffusion=_float(cfg.swimmer.rot_diffusion),
-        duration=_float(cfg.episode.duration),
-        update_interval=_float(cfg.episode.update_interval),
-        dt=_float(cfg.episode.dt),
-        shape_factor_max=_float(cfg.swimmer.shape_factor_max),
-        signals=tuple(cfg.signals.names),
-    )
+    return from_node(EnvParams, {"swimmer.": cfg.swimmer, "episode.": cfg.episode},
+                     signals=tuple(cfg.signals.names))
 
 
 def flow_spec(flow: DictConfig, rt: Runtime) -> FlowSpec:
     """The ``flow`` group (``flow=stochastic | dns_replay | dns``)."""
     one_of("flow.name", flow.name, FLOWS)
     if flow.name == "stochastic":
-        return StochasticSpec(
-            kubo=_float(flow.kubo),
-            n_modes=_int(flow.n_modes),
-            n_grid=_int(flow.n_grid),
-            spacing=_float(flow.spacing),
-            basis=flow.get("basis", "redrawn"),
-            basis_seed=_int(flow.get("basis_seed", 0)),
-            amplitudes=flow.get("amplitudes", "stationary"),
-            velocity_scale=flow.get("velocity_scale", "total"),
-        )
+        return from_node(StochasticSpec, {"flow.": flow})
     if flow.name == "dns_replay":
         paths = flow.path if isinstance(flow.path, ListConfig | list | tuple) else [flow.path]
-        decode_n = flow.get("decode_n", None)
-        return StoredRunSpec(
-            tuple(Path(str(p)) for p in paths),
-            allow_incomplete=as_bool("flow.allow_incomplete", flow.get("allow_incomplete", False)),
-            decode_n=None if decode_n is None else _int(decode_n),
-            flows_per_start=_int(flow.get("flows_per_start", 1)),
-        )
-    return LiveDNSSpec(
+        return from_node(StoredRunSpec, {"flow.": flow},
+                         paths=tuple(Path(str(p)) for p in paths))
+    return from_node(
+        LiveDNSSpec, {"flow.": flow},
         dns=live_dns_params(OmegaConf.to_container(flow.dns), rt.device, rt.dtype),
         spinup_time=_float(flow.spinup.time),
         measure_time=_float(flow.spinup.measure_time),
-        interval_tau_k=_float(flow.interval_tau_k),
     )
 
 
 def eval_sizes(node: DictConfig) -> EvalSizes:
     """``eval.*``."""
-    return EvalSizes(
-        n_flows=_int(node.n_flows),
-        n_swimmers=_int(node.n_swimmers),
-        flows_per_batch=_int(node.flows_per_batch),
-        progress=as_bool("eval.progress", node.progress),
-        record=_int(node.get("record", 0)),
-    )
+    return from_node(EvalSizes, {"eval.": node})
 
 
 def eval_setup(cfg: DictConfig) -> EvalSetup:
     """Physics, flow, runtime, evaluation sizes and seed of any evaluating command."""
     params = env_params(cfg)
     rt = runtime(cfg)
-    return EvalSetup(
-        flow=flow_spec(cfg.flow, rt),
-        params=params,
-        runtime=rt,
-        sizes=eval_sizes(cfg.eval),
-        seed=as_int("seed", cfg.seed, low=0),
-        record=record_of(cfg),
-    )
+    return from_node(EvalSetup, {"": cfg}, flow=flow_spec(cfg.flow, rt), params=params,
+                     runtime=rt, sizes=eval_sizes(cfg.eval), record=record_of(cfg))
 
 
 def strategy_spec(node: DictConfig) -> StrategySpec:
-    """The ``strategy`` group."""
+    """The ``strategy`` group (each strategy's yaml holds its own fields only)."""
     if node.name == "naive":
         return StrategySpec("naive", shape_factor=_float(node.shape_factor))
     if node.name == "minimal":
@@ -167,13 +169,8 @@ def strategy_spec(node: DictConfig) -> StrategySpec:
 
 def eval_config(cfg: DictConfig) -> EvalConfig:
     """``swimrl-eval`` (``conf/evaluate.yaml``)."""
-    policy = cfg.get("policy")
-    return EvalConfig(
-        setup=eval_setup(cfg),
-        strategy=strategy_spec(cfg.strategy),
-        policy=None if policy is None else str(policy),
-        overwrite=as_bool("overwrite", cfg.overwrite),
-    )
+    return from_node(EvalConfig, {"": cfg}, setup=eval_setup(cfg),
+                     strategy=strategy_spec(cfg.strategy))
 
 
 def compare_config(cfg: DictConfig) -> CompareConfig:
@@ -185,119 +182,75 @@ def compare_config(cfg: DictConfig) -> CompareConfig:
         list(c.strategies),
         [_float(x) for x in c.naive_shape_factors],
         minimal,
-        [str(p) for p in (c.get("policies") or [])],
-        [read_coefficients(p) for p in (c.get("minimal_fits") or [])],
+        [str(p) for p in (c.policies or [])],
+        [read_coefficients(p) for p in (c.minimal_fits or [])],
     )
-    for v in variants:
-        v.strategy.check_bound(setup.params.shape_factor_max)
-    return CompareConfig(
-        setup=setup,
-        variants=variants,
-        shared_flows=as_bool("compare.shared_flows", c.get("shared_flows", False)),
-        overwrite=as_bool("overwrite", cfg.overwrite),
-        resume=as_bool("compare.resume", c.get("resume", False)),
-    )
+    return from_node(CompareConfig, {"compare.": c, "": cfg}, setup=setup, variants=variants)
 
 
 def fit_config(cfg: DictConfig) -> FitConfig:
     """``swimrl-fit-minimal`` (``conf/fit_minimal.yaml``)."""
-    return FitConfig(eval=eval_config(cfg), sample_every=_int(cfg.fit.sample_every))
+    return from_node(FitConfig, {"fit.": cfg.fit}, eval=eval_config(cfg))
 
 
 def gain_scan_config(cfg: DictConfig) -> GainScanConfig:
     """``swimrl-gain-scan`` (``conf/gain_scan.yaml``)."""
     ev = eval_config(cfg)
-    return GainScanConfig(setup=ev.setup, policy=ev.policy,
-                          gains=tuple(_float(g) for g in cfg.gains), overwrite=ev.overwrite)
+    return from_node(GainScanConfig, {"": cfg}, setup=ev.setup, policy=ev.policy,
+                     overwrite=ev.overwrite)
 
 
 def figures_config(cfg: DictConfig) -> FiguresConfig:
     """``swimrl-figures`` (``conf/figures.yaml``); paths are taken from the launch directory."""
     from hydra.utils import to_absolute_path
 
+    def path(value) -> Path:
+        return Path(to_absolute_path(str(value)))
+
     rt = runtime(cfg)
-    spec = flow_spec(cfg.flow, rt)
-    one_of("flow.name", cfg.flow.name, ("stochastic",))
-    only = cfg.get("only")
-    if only is not None:
-        one_of("only", str(only), FIGURES)
-    f = cfg.figures
-    return FiguresConfig(
-        out=Path(to_absolute_path(str(cfg.out))),
-        cache=Path(to_absolute_path(str(cfg.cache))),
-        runtime=rt,
-        params=env_params(cfg),
-        flow=spec,
-        only=None if only is None else str(only),
-        n_flows=as_int("figures.n_flows", f.n_flows),
-        n_swimmers=as_int("figures.n_swimmers", f.n_swimmers),
-        n_traj=as_int("figures.n_traj", f.n_traj),
-        robust_flows=as_int("figures.robust_flows", f.robust_flows),
-        robust_swimmers=as_int("figures.robust_swimmers", f.robust_swimmers),
-        seed=as_int("seed", cfg.seed, low=0),
-        policies=str(cfg.policies),
-        results=Path(to_absolute_path(str(cfg.results))),
-        curves=Path(to_absolute_path(str(cfg.curves))),
-        fits=Path(to_absolute_path(str(cfg.fits))),
-        ablation=Path(to_absolute_path(str(cfg.ablation))),
-        dns=None if cfg.get("dns") is None else dns_figures_config(cfg.dns, to_absolute_path),
-        progress=as_bool("progress", cfg.progress),
+    return from_node(
+        FiguresConfig, {"figures.": cfg.figures, "": cfg},
+        out=path(cfg.out), cache=path(cfg.cache), runtime=rt, flow=flow_spec(cfg.flow, rt),
+        params=env_params(cfg), results=path(cfg.results), curves=path(cfg.curves),
+        fits=path(cfg.fits), ablation=path(cfg.ablation),
+        dns=None if cfg.dns is None else dns_figures_config(cfg.dns, path),
     )
 
 
-def dns_figures_config(node: DictConfig, absolute) -> DNSFiguresConfig:
-    """``dns.*`` of ``conf/figures.yaml`` (paths from the launch directory)."""
-    decode_n = node.get("decode_n")
-    return DNSFiguresConfig(
-        store=Path(absolute(str(node.store))), record=Path(absolute(str(node.record))),
-        transfer=Path(absolute(str(node.transfer))), checks=Path(absolute(str(node.checks))),
-        policy=str(node.policy), trained=str(node.trained),
-        curve=None if node.get("curve") is None else Path(absolute(str(node.curve))),
-        n_swimmers=as_int("dns.n_swimmers", node.n_swimmers, low=1),
-        n_traj=as_int("dns.n_traj", node.n_traj, low=1),
-        decode_n=None if decode_n is None else as_int("dns.decode_n", decode_n, low=8),
-        glyph_window=as_float("dns.glyph_window", node.glyph_window, lambda v: v > 0, "> 0"),
-        glyph_every=as_float("dns.glyph_every", node.glyph_every, lambda v: v > 0, "> 0"),
+def dns_figures_config(node: DictConfig, path) -> DNSFiguresConfig:
+    """``dns.*`` of ``conf/figures.yaml`` (``path``: a path from the launch directory); the
+    glyph times go to their check as written (it names them so)."""
+    return from_node(
+        DNSFiguresConfig, {"dns.": node},
+        store=path(node.store), record=path(node.record), transfer=path(node.transfer),
+        checks=path(node.checks), curve=None if node.curve is None else path(node.curve),
+        glyph_window=node.glyph_window, glyph_every=node.glyph_every,
     )
 
 
-def _from_node(cls, node: DictConfig, **given):
-    """Dataclass ``cls`` from the keys of ``node`` with its field names (numbers converted as
-    the field's type says); ``given`` fields are passed as they are."""
-    values = dict(given)
-    for f in dataclasses.fields(cls):
-        if f.init and f.name not in given and f.name in node:
-            v = node[f.name]
-            if v is not None and f.type.startswith(("int", "float")):
-                v = _int(v) if f.type.startswith("int") else _float(v)
-            values[f.name] = v
-    return cls(**values)
+def model_spec(node: DictConfig) -> ModelSpec:
+    """``model.*``."""
+    return from_node(ModelSpec, {"model.": node})
 
 
 def train_config(cfg: DictConfig) -> TrainConfig:
     """``swimrl-train`` (``conf/train.yaml`` and a ``train_preset``)."""
-    t, model = cfg.train, cfg.model
+    t = cfg.train
     reward_scale = None if t.reward_scale in (None, "auto") else _float(t.reward_scale)
-    return TrainConfig(
+    return from_node(
+        TrainConfig, {"": cfg},
         evaluation=eval_setup(cfg),
-        train=_from_node(TrainSettings, t, reward_scale=reward_scale),
-        loss=_from_node(LossSettings, cfg.loss),
-        optim=_from_node(OptimSettings, cfg.optim),
-        model=ModelSpec(
-            hidden=tuple(_int(h) for h in model.hidden),
-            activation=str(model.activation),
-            init_std=_float(model.init_std),
-            min_std=_float(model.min_std),
-        ),
-        resume=cfg.resume,
-        overwrite=cfg.overwrite,
+        train=from_node(TrainSettings, {"train.": t}, reward_scale=reward_scale),
+        loss=from_node(LossSettings, {"loss.": cfg.loss}),
+        optim=from_node(OptimSettings, {"optim.": cfg.optim}),
+        model=model_spec(cfg.model),
         eval_flow=eval_flow_spec(cfg),
     )
 
 
 def eval_flow_spec(cfg: DictConfig) -> FlowSpec | None:
     """``eval_flow.*``: the training flow with these keys replaced (None if there are none)."""
-    extra = cfg.get("eval_flow")
+    extra = cfg.eval_flow
     if not extra:
         return None
     for key in extra:
@@ -305,33 +258,29 @@ def eval_flow_spec(cfg: DictConfig) -> FlowSpec | None:
     return flow_spec(OmegaConf.merge(cfg.flow, extra), runtime(cfg))
 
 
+def dns_runtime(cfg: DictConfig) -> Runtime:
+    """``device``, ``dtype``, ``threads`` of ``swimrl-dns`` (which integrates no swimmers:
+    the default kernel)."""
+    return Runtime.from_names(cfg.device, cfg.dtype, _int(cfg.threads))
+
+
 def dns_run(cfg: DictConfig) -> DNSRun:
     """``swimrl-dns`` (``conf/dns.yaml``); a relative ``store.path`` is taken from the launch
     directory."""
     from hydra.utils import to_absolute_path
 
-    rt = runtime(cfg)
+    rt = dns_runtime(cfg)
     params = DNSParams.from_mapping(
         {**OmegaConf.to_container(cfg.dns), "device": str(rt.device),
          "dtype": str(rt.dtype).replace("torch.", "")}
     )
-    store = cfg.store
-    return DNSRun(
+    return from_node(
+        DNSRun, {"store.": cfg.store, "": cfg},
         params=params,
-        seed=as_int("seed", cfg.seed, low=0),
-        init_kind=str(cfg.init.kind),
+        init_kind=cfg.init.kind,
         init_energy=_float(cfg.init.energy),
         init_k_peak=_float(cfg.init.k_peak),
         spinup_time=_float(cfg.spinup.time),
         measure_time=_float(cfg.spinup.measure_time),
-        path=Path(to_absolute_path(str(store.path))),
-        n_times=_int(store.n_times),
-        interval_tau_k=_float(store.interval_tau_k),
-        chunk_times=_int(store.chunk_times),
-        overwrite=as_bool("store.overwrite", store.overwrite),
-        extend=as_bool("store.extend", store.get("extend", False)),
-        checkpoint_seconds=_float(store.checkpoint_seconds),
-        diag_every=_int(store.diag_every),
-        max_steps=_optional(cfg.get("max_steps"), _int),
-        progress=as_bool("progress", cfg.progress),
+        path=Path(to_absolute_path(str(cfg.store.path))),
     )

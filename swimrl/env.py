@@ -36,7 +36,7 @@ from tensordict import TensorDict, TensorDictBase
 from torchrl.data import Bounded, Categorical, Composite, Unbounded
 from torchrl.envs import EnvBase
 
-from swimrl.errors import ConfigError, IntegrityError, as_float
+from swimrl.errors import ConfigError, IntegrityError, as_float, keep_number_types
 from swimrl.flows.base import GriddedFlow
 from swimrl.flows.build import FlowSpec, build_flow
 from swimrl.physics.integrator import select_kernel
@@ -61,7 +61,9 @@ class EnvParams:
     """Swimmer and episode parameters (dimensionless: times / tau_K, speeds / u_rms).
 
     ``shape_factor_max`` (``Lambda_max``) bounds the action: the environment's action spec is
-    ``[-Lambda_max, Lambda_max]``, from which actors and baselines read it.
+    ``[-Lambda_max, Lambda_max]``, from which actors and baselines read it. The defaults (for
+    library calls) are the configs' ``swimmer.*``, ``episode.*`` and ``signals=all``
+    (``tests/test_config_sources.py``).
     """
 
     swim_speed: float = 0.707
@@ -101,6 +103,7 @@ class EnvParams:
                 "duration/update_interval",
             ),
         )
+        keep_number_types(self)
 
 
 class SwimmerEnv(EnvBase):

@@ -3,12 +3,16 @@
 Every check produces one line ``KEY=VALUE is invalid: allowed RANGE`` that names the config
 key as the user writes it (``swimmer.shape_factor_max``, ``flow.dns.nu``, ...). The typed
 configs (:mod:`swimrl.config` builds them) call these checks in their ``__post_init__``, so a
-bad value stops the command before any compute.
+bad value stops the command before any compute; :func:`keep_number_types` then stores their
+numbers as the types the fields declare, so no user of a checked value converts it again.
 """
 
 from __future__ import annotations
 
+import dataclasses
 import math
+import types
+import typing
 from collections.abc import Callable, Iterable, Iterator
 from contextlib import contextmanager
 
@@ -82,3 +86,30 @@ def key_prefix(prefix: str) -> Iterator[None]:
         yield
     except ConfigError as err:
         raise ConfigError(f"{prefix}{err}") from err
+
+
+def number_type(hint) -> tuple[type | None, bool]:
+    """``(int | float | None, is_tuple)``: the number type a field annotation declares
+    (``int``, ``float | None``, ``tuple[int, ...]``); ``None`` for any other annotation."""
+    if typing.get_origin(hint) in (typing.Union, types.UnionType):
+        args = [a for a in typing.get_args(hint) if a is not type(None)]
+        hint = args[0] if len(args) == 1 else None
+    if typing.get_origin(hint) is tuple:
+        args = typing.get_args(hint)
+        return (args[0] if args and args[0] in (int, float) else None), True
+    return (hint if hint in (int, float) else None), False
+
+
+def keep_number_types(obj) -> None:
+    """After the checks of a frozen dataclass's ``__post_init__``: its int and float fields
+    (optional ones, tuples of them) stored as ``int`` and ``float`` (``1e6`` ->
+    ``1000000``, ``1`` -> ``1.0``), the types the checks allowed."""
+    hints = typing.get_type_hints(type(obj))
+    for f in dataclasses.fields(obj):
+        kind, is_tuple = number_type(hints[f.name])
+        value = getattr(obj, f.name)
+        if kind is None or value is None:
+            continue
+        convert = (lambda v: v if type(v) is int else int(float(v))) if kind is int else float
+        object.__setattr__(obj, f.name,
+                           tuple(convert(v) for v in value) if is_tuple else convert(value))

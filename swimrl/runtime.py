@@ -65,16 +65,18 @@ def check_memory(need: int, device: torch.device, key: str, value, what: str) ->
 @dataclass(frozen=True)
 class Runtime:
     """``device``, ``dtype`` (``float32`` | ``float64``), ``threads`` (None: all cores) and
-    ``kernel`` (``auto`` | ``eager`` | ``fused``), checked on construction."""
+    ``kernel`` (``auto`` | ``eager`` | ``fused``), checked on construction. The default
+    ``kernel`` is the configs' (``tests/test_config_sources.py``); ``threads`` differs between
+    commands (``conf/evaluate.yaml``: all cores, ``conf/train.yaml``: 1) and has none."""
 
     device: torch.device
     dtype: torch.dtype
-    threads: int | None = None
+    threads: int | None
     kernel: str = "auto"
 
     @classmethod
     def from_names(
-        cls, device: str, dtype: str, threads: int | None = None, kernel: str = "auto"
+        cls, device: str, dtype: str, threads: int | None, kernel: str = "auto"
     ) -> Runtime:
         """From the config's strings (``device=cpu dtype=float32 threads=1 kernel=auto``)."""
         dev = resolve_device(str(device))

@@ -11,8 +11,9 @@ import pytest
 from swimrl.config import compare_config
 from swimrl.env import SwimmerEnv
 from swimrl.errors import BadFileError, ConfigError
-from swimrl.evaluation.compare import PARTIAL, compare
+from swimrl.evaluation.compare import compare
 from swimrl.policies import pretrained
+from swimrl.policies.files import RunLayout
 
 from .conftest import SMALL
 from .test_bad_input import COMPARE, _run_cases
@@ -40,7 +41,7 @@ def _count_builds(monkeypatch) -> list:
 @pytest.mark.parametrize("shared", [False, True])
 def test_resumed_comparison_is_the_uninterrupted_one(compose_cfg, tmp_path, monkeypatch, shared):
     over = [f"compare.shared_flows={str(shared).lower()}"]
-    partial = tmp_path / PARTIAL
+    partial = RunLayout(tmp_path).comparison_partial
     full = compare(_config(compose_cfg, *over), partial)
     # interrupted after the first chunk of each group (3 chunks of 1 flow per group)
     state = json.loads(partial.read_text())
@@ -57,7 +58,7 @@ def test_resumed_comparison_is_the_uninterrupted_one(compose_cfg, tmp_path, monk
 
 
 def test_resume_of_another_comparison_is_refused(compose_cfg, tmp_path):
-    partial = tmp_path / PARTIAL
+    partial = RunLayout(tmp_path).comparison_partial
     compare(_config(compose_cfg), partial)
     with pytest.raises(ConfigError, match=r"seed: saved 0, now 5"):
         compare(_config(compose_cfg, "seed=5", "compare.resume=true"), partial)
@@ -70,7 +71,7 @@ def test_resume_of_another_comparison_is_refused(compose_cfg, tmp_path):
 
 
 def test_malformed_partial_is_refused(compose_cfg, tmp_path):
-    partial = tmp_path / PARTIAL
+    partial = RunLayout(tmp_path).comparison_partial
     compare(_config(compose_cfg), partial)
     state = json.loads(partial.read_text())
     state["done"][0][1]["per_flow"][0] = []
@@ -90,26 +91,26 @@ def test_cli_resume(compose_cfg, tmp_path):
     over = [*SMALL, *SIZE, "compare.strategies=[sto,naive]"]
     whole, part = tmp_path / "whole", tmp_path / "part"
     part.mkdir()
-    compare(compare_config(compose_cfg(over, name="compare")), part / PARTIAL)
+    compare(compare_config(compose_cfg(over, name="compare")), RunLayout(part).comparison_partial)
     (part / "comparison.json").unlink(missing_ok=True)
-    state = json.loads((part / PARTIAL).read_text())
+    state = json.loads(RunLayout(part).comparison_partial.read_text())
     state["done"] = [d[:1] for d in state["done"]]
-    (part / PARTIAL).write_text(json.dumps(state))
-    kept = (part / PARTIAL).read_text()
+    RunLayout(part).comparison_partial.write_text(json.dumps(state))
+    kept = RunLayout(part).comparison_partial.read_text()
     bad, bad_value = _run_cases([
         [COMPARE, [*over, f"hydra.run.dir={part}"]],
         [COMPARE, [*over, "compare.resume=maybe", f"hydra.run.dir={part}"]],
     ], tmp_path)
     assert bad["rc"] == 2 and "compare.resume=true" in bad["stderr"].strip().splitlines()[-1]
     assert bad_value["rc"] == 2 and "compare.resume" in bad_value["stderr"].splitlines()[-1]
-    assert sorted(p.name for p in part.iterdir()) == [PARTIAL]
-    assert (part / PARTIAL).read_text() == kept
+    assert sorted(p for p in part.iterdir()) == [RunLayout(part).comparison_partial]
+    assert RunLayout(part).comparison_partial.read_text() == kept
     ok, finished = _run_cases([
         [COMPARE, [*over, "compare.resume=true", f"hydra.run.dir={part}"]],
         [COMPARE, [*over, f"hydra.run.dir={whole}"]],
     ], tmp_path)
     assert ok["rc"] == 0 and finished["rc"] == 0, ok["stderr"][-2000:] + finished["stderr"][-2000:]
-    assert not (part / PARTIAL).exists()
+    assert not RunLayout(part).comparison_partial.exists()
     resumed = json.loads((part / "comparison.json").read_text())
     uninterrupted = json.loads((whole / "comparison.json").read_text())
     for a, b in zip(resumed["rows"], uninterrupted["rows"], strict=True):
@@ -126,7 +127,7 @@ def test_resume_with_a_replaced_policy_file_is_refused(compose_cfg, tmp_path):
     policy = tmp_path / "policy.pt"
     policy.write_bytes((root / "ku10" / "policy.pt").read_bytes())
     over = ["compare.strategies=[sto,policy]", f"compare.policies=[{policy}]"]
-    partial = tmp_path / PARTIAL
+    partial = RunLayout(tmp_path).comparison_partial
     compare(_config(compose_cfg, *over), partial)
     policy.write_bytes((root / "ku1" / "policy.pt").read_bytes())
     with pytest.raises(ConfigError, match=r"digests"):

@@ -12,11 +12,8 @@ import torch
 from hydra import compose, initialize_config_module
 
 from swimrl.analysis.figures import dns as dfig
-from swimrl.analysis.figures.records import DNSFiguresConfig, FiguresConfig
-from swimrl.env import EnvParams
-from swimrl.flows.build import StochasticSpec
+from swimrl.config import figures_config
 from swimrl.policies.baselines import StrategyLabel
-from swimrl.runtime import Runtime
 
 torch.set_num_threads(1)
 
@@ -103,14 +100,14 @@ def test_replay_record_is_made_once_from_the_store_and_read_after(tmp_path):
             "spinup.measure_time=0.1", "store.n_times=40", "store.diag_every=5",
             "progress=false", "threads=1", f"store.path={store}"])
     run_dns(dns_run(dns_cfg))
-    cfg = FiguresConfig(out=tmp_path / "fig", cache=tmp_path / "cache",
-                        runtime=Runtime.from_names("cpu", "float32", 1),
-                        params=EnvParams(duration=1.0), flow=StochasticSpec(kubo=10.0),
-                        progress=False)
-    dns = DNSFiguresConfig(store=store, record=tmp_path / "rec" / "record.npz",
-                           transfer=tmp_path / "none", checks=tmp_path / "none.json",
-                           policy="naive(-0.5)", trained="naive(0.5)", n_swimmers=5, n_traj=2,
-                           decode_n=None)
+    with initialize_config_module("swimrl.conf", version_base="1.3"):
+        fig_cfg = compose(config_name="figures", overrides=["episode.duration=1.0",
+                                                            "progress=false"])
+    cfg = replace(figures_config(fig_cfg), out=tmp_path / "fig", cache=tmp_path / "cache")
+    dns = replace(cfg.dns, store=store, record=tmp_path / "rec" / "record.npz",
+                  transfer=tmp_path / "none", checks=tmp_path / "none.json",
+                  policy="naive(-0.5)", trained="naive(0.5)", curve=None, n_swimmers=5,
+                  n_traj=2, decode_n=None)
     missing, why = dfig.dns_record(cfg, replace(dns, policy="nowhere/policy.pt"))
     assert missing is None and "dns.policy" in why and not dns.record.exists()
     a, why = dfig.dns_record(cfg, dns)

@@ -6,6 +6,7 @@ from __future__ import annotations
 import json
 import math
 import shutil
+from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
@@ -16,9 +17,7 @@ from swimrl.analysis.figures.build import BUILDERS
 from swimrl.analysis.performance import load, summarise
 from swimrl.analysis.policy_maps import binned_mean, snn_extremes
 from swimrl.analysis.training_curves import PAPER_EPISODE_FRAMES
-from swimrl.env import EnvParams
-from swimrl.flows.build import StochasticSpec
-from swimrl.runtime import Runtime
+from swimrl.config import figures_config
 
 RESULTS = Path(__file__).parent.parent / "docs" / "results" / "smart_ku_sweep"
 RNG = np.random.default_rng(1)
@@ -89,12 +88,11 @@ def test_figure_functions_on_tiny_records(tmp_path):
     assert sweep["ratio"] == pytest.approx([1.2, 1.0])
 
 
-def test_ku_record_is_cached_and_consistent(tmp_path):
-    cfg = records.FiguresConfig(
-        out=tmp_path / "fig", cache=tmp_path / "cache", runtime=Runtime.from_names("cpu",
-                                                                                  "float32", 1),
-        params=EnvParams(duration=1.0), flow=StochasticSpec(kubo=10.0, n_grid=64, spacing=0.1),
-        n_flows=2, n_swimmers=3, n_traj=2, progress=False)
+def test_ku_record_is_cached_and_consistent(compose_cfg, tmp_path):
+    cfg = replace(figures_config(compose_cfg(
+        ["figures.n_flows=2", "figures.n_swimmers=3", "figures.n_traj=2", "progress=false",
+         "episode.duration=1.0", "flow.n_grid=64", "flow.spacing=0.1"], name="figures")),
+        out=tmp_path / "fig", cache=tmp_path / "cache")
     a = records.ku_record(cfg, 10.0)
     assert a["final"].shape == (3, 6, 2) and a["traj"].shape == (3, 2, 11, 2)
     assert a["signals"].shape == (6, 10, 5) and a["sto_Lambda"].shape == (4, 10)

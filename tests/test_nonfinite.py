@@ -12,7 +12,7 @@ import torch
 from swimrl.config import train_config
 from swimrl.errors import BadFileError, NonFiniteError
 from swimrl.evaluation.records import write_json
-from swimrl.policies.files import checkpoint_path, load_file
+from swimrl.policies.files import RunLayout, load_file
 from swimrl.rl.checkpoint import load_checkpoint
 from swimrl.rl.run import train
 from swimrl.rl.trainer import PPOTrainer
@@ -46,7 +46,7 @@ def test_training_stops_at_the_first_non_finite_loss(compose_cfg, tmp_path, monk
     with pytest.raises(NonFiniteError, match="update 3: loss_objective=nan"):
         train(cfg, tmp_path)
     assert not (tmp_path / "metrics.json").exists() and not (tmp_path / "policy.pt").exists()
-    assert load_file(checkpoint_path(tmp_path))["counters"]["updates"] == 2
+    assert load_file(RunLayout(tmp_path).checkpoint)["counters"]["updates"] == 2
     assert load_file(tmp_path / "checkpoints" / "prev.pt")["counters"]["updates"] == 1
 
 

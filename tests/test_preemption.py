@@ -18,9 +18,8 @@ from pathlib import Path
 import pytest
 
 from swimrl.config import compare_config, train_config
-from swimrl.evaluation.compare import PARTIAL, compare
+from swimrl.evaluation.compare import compare
 from swimrl.evaluation.jobs import (
-    LOCK_FILE,
     PREEMPTED_EXIT,
     Preempted,
     RunDirInUseError,
@@ -28,7 +27,7 @@ from swimrl.evaluation.jobs import (
     refuse_if_locked,
     run_lock,
 )
-from swimrl.policies.files import checkpoint_path, load_file
+from swimrl.policies.files import RunLayout, load_file
 from swimrl.rl.run import train
 
 from .conftest import SMALL
@@ -94,7 +93,7 @@ def test_sigterm_stops_training_after_the_update_in_flight_and_resume_finishes(
     out = tmp_path / "run"
     resumed = train_config(compose_cfg([*LONGER, "resume=true"], name="train"))
     proc, log = _start(TRAIN, [*LONGER, f"hydra.run.dir={out}"], tmp_path)
-    _wait_for(out / "checkpoints" / "prev.pt", proc, log)  # two updates done
+    _wait_for(RunLayout(out).prev_checkpoint, proc, log)  # two updates done
     # a second process on the running directory is refused before any compute
     holder = f"PID {proc.pid} on host "
     with pytest.raises(RunDirInUseError, match=holder):
@@ -104,34 +103,35 @@ def test_sigterm_stops_training_after_the_update_in_flight_and_resume_finishes(
     rc, text = _stop(proc, signal.SIGTERM, log)
     m = _preempted(rc, text, r"preempted by SIGTERM after update (\d+)/30 \((\d+) frames\): "
                    r"checkpoint written to (\S+); continue with resume=true$")
-    assert Path(m[3]) == checkpoint_path(out), m[0]
+    assert Path(m[3]) == RunLayout(out).checkpoint, m[0]
     updates = int(m[1])
     assert 2 <= updates < 30 and int(m[2]) == 80 * updates
-    assert load_file(checkpoint_path(out))["counters"]["updates"] == updates
+    assert load_file(RunLayout(out).checkpoint)["counters"]["updates"] == updates
     assert m[0] in (out / "train.log").read_text()
-    assert not (out / LOCK_FILE).exists() and not (out / "metrics.json").exists()
+    assert not RunLayout(out).lock.exists() and not (out / "metrics.json").exists()
     # a lock file left by a killed process blocks nothing; resume=true finishes the run
-    (out / LOCK_FILE).write_text(json.dumps({"pid": _dead_pid(), "host": "x", "command": "x",
+    RunLayout(out).lock.write_text(json.dumps({"pid": _dead_pid(), "host": "x", "command": "x",
                                              "since": "x"}))
     metrics = train(resumed, out)
     assert metrics["training"]["updates"] == 30 and metrics["training"]["frames"] == 2400
-    assert (out / "metrics.json").is_file() and not (out / LOCK_FILE).exists()
+    assert (out / "metrics.json").is_file() and not RunLayout(out).lock.exists()
 
 
 def test_sigusr1_stops_a_comparison_after_the_chunk_in_flight(compose_cfg, tmp_path):
     out = tmp_path / "run"
     proc, log = _start(COMPARE, [*COMPARISON, f"hydra.run.dir={out}"], tmp_path)
-    _wait_for(out / PARTIAL, proc, log)  # the first chunk is done
+    _wait_for(RunLayout(out).comparison_partial, proc, log)  # the first chunk is done
     rc, text = _stop(proc, signal.SIGUSR1, log)
     m = _preempted(rc, text, r"preempted by SIGUSR1 with (\d+) flow chunk\(s\) of 8 left: "
                    r"partial record written to (\S+); continue with compare.resume=true$")
-    assert Path(m[2]) == out / PARTIAL, m[0]
-    state = json.loads((out / PARTIAL).read_text())
+    assert Path(m[2]) == RunLayout(out).comparison_partial, m[0]
+    state = json.loads(RunLayout(out).comparison_partial.read_text())
     assert 1 <= sum(len(d) for d in state["done"]) == 8 - int(m[1]) < 8
-    assert not (out / "comparison.json").exists() and not (out / LOCK_FILE).exists()
+    assert not (out / "comparison.json").exists() and not RunLayout(out).lock.exists()
     # compare.resume=true completes it: the uninterrupted comparison's numbers
     resumed = compare(compare_config(compose_cfg([*COMPARISON, "compare.resume=true"],
-                                                 name="compare")), out / PARTIAL)
+                                                 name="compare")),
+                      RunLayout(out).comparison_partial)
     whole = compare(compare_config(compose_cfg(COMPARISON, name="compare")))
     for a, b in zip(resumed["rows"], whole["rows"], strict=True):
         assert a["label"] == b["label"] and a["per_flow"] == b["per_flow"]
@@ -152,7 +152,7 @@ def test_every_command_refuses_a_locked_run_directory(tmp_path):
             [EVAL, [*SMALL, f"hydra.run.dir={run}"]],
             [TRAIN, ["-m", *TINY, "seed=0", "resume=true", f"hydra.sweep.dir={sweep}"]],
         ], tmp_path)
-        assert sorted(p.name for p in run.iterdir()) == [LOCK_FILE]
+        assert sorted(p for p in run.iterdir()) == [RunLayout(run).lock]
     for res in results:
         last = res["stderr"].strip().splitlines()[-1]
         assert res["rc"] == 2 and "Traceback" not in res["stderr"], res
@@ -161,7 +161,7 @@ def test_every_command_refuses_a_locked_run_directory(tmp_path):
 
 
 def test_a_stale_lock_file_does_not_block_and_a_held_one_does(tmp_path):
-    (tmp_path / LOCK_FILE).write_text(json.dumps({"pid": _dead_pid(), "host": "gone"}))
+    RunLayout(tmp_path).lock.write_text(json.dumps({"pid": _dead_pid(), "host": "gone"}))
     refuse_if_locked(tmp_path)  # nobody holds it
     with run_lock(tmp_path, "first") as path:
         info = json.loads(path.read_text())

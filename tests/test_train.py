@@ -16,7 +16,7 @@ from tensorboard.backend.event_processing.event_accumulator import EventAccumula
 
 from swimrl.config import train_config
 from swimrl.errors import ConfigError
-from swimrl.policies.files import checkpoint_path, load_file
+from swimrl.policies.files import RunLayout, load_file
 from swimrl.rl.builders import auto_reward_scale, make_env
 from swimrl.rl.plan import EVAL_SEED_OFFSET, make_plan
 from swimrl.rl.run import train as _train
@@ -47,6 +47,11 @@ def train(cfg, out):
     return _train(train_config(cfg), out)
 
 
+def _env(c, plan):
+    """The training env of the typed config ``c``."""
+    return make_env(c.evaluation.flow, c.params, c.runtime, c.train, c.loss, plan.train_seed)
+
+
 def validate_train_cfg(cfg):
     """The plan of a composed training config (all checks first)."""
     return make_plan(train_config(cfg))
@@ -61,7 +66,7 @@ def train_cfg(compose_cfg):
 
 
 def scalars(run_dir) -> dict[str, list[tuple[int, float]]]:
-    ea = EventAccumulator(str(run_dir / "tb" / "ppo"))
+    ea = EventAccumulator(str(RunLayout(run_dir).tb / "ppo"))
     ea.Reload()
     return {t: [(e.step, e.value) for e in ea.Scalars(t)] for t in ea.Tags()["scalars"]}
 
@@ -75,7 +80,7 @@ def test_ppo_end_to_end(train_cfg, tmp_path, anneal):
     assert metrics["training"]["updates"] == 4 and metrics["training"]["frames"] == 320
     on_disk = json.loads((tmp_path / "metrics.json").read_text())
     assert on_disk["R_hat_mean"] == metrics["R_hat_mean"]
-    assert (tmp_path / "policy.pt").is_file() and checkpoint_path(tmp_path).is_file()
+    assert (tmp_path / "policy.pt").is_file() and RunLayout(tmp_path).checkpoint.is_file()
     assert list((tmp_path / "tb" / "ppo").glob("events.out.tfevents.*"))
     s = scalars(tmp_path)
     assert "train/loss_entropy" not in s  # entropy_coeff = 0: no Monte-Carlo entropy sample
@@ -165,7 +170,7 @@ def test_plan_and_reward_scale(train_cfg):
     plan = validate_train_cfg(train_cfg("train.total_frames=330"))
     assert (plan.n_updates, plan.total_frames, plan.rollout_steps) == (4, 320, 10)
     assert plan.minibatches_per_epoch == 2 and plan.frames_per_episode == 4 * 20
-    env = make_env(train_config(train_cfg()), plan)
+    env = _env(train_config(train_cfg()), plan)
     base = env.base_env
     scale = auto_reward_scale(base, 0.99)
     # (1 - gamma) / (v_s T_u), flow units: v_s = 0.707 u_rms, T_u = 0.1 tau_K
@@ -217,7 +222,7 @@ def test_kill_and_resume_round_trip(train_cfg, tmp_path, monkeypatch):
 
     def crashing_update(self, data):
         if self.counters["updates"] == 2:
-            checkpoint_path(self.run_dir).with_suffix(".pt.tmp").write_bytes(b"partial")
+            self.run.checkpoint.with_suffix(".pt.tmp").write_bytes(b"partial")
             raise KeyboardInterrupt("simulated kill")
         return original_update(self, data)
 
@@ -226,7 +231,7 @@ def test_kill_and_resume_round_trip(train_cfg, tmp_path, monkeypatch):
     with pytest.raises(KeyboardInterrupt):
         train(train_cfg(), tmp_path)
     assert sorted(saved) == [1, 2] and not (tmp_path / "metrics.json").exists()
-    assert load_file(checkpoint_path(tmp_path))["counters"]["updates"] == 2
+    assert load_file(RunLayout(tmp_path).checkpoint)["counters"]["updates"] == 2
     monkeypatch.setattr(PPOTrainer, "update", original_update)
 
     # a new run in a dir with a checkpoint needs resume=true; the config must match
@@ -238,8 +243,8 @@ def test_kill_and_resume_round_trip(train_cfg, tmp_path, monkeypatch):
     # restore reproduces the state at the checkpoint exactly
     cfg = train_cfg("resume=true")
     c = train_config(cfg)
-    trainer = PPOTrainer(c, make_plan(c), tmp_path, torch.device("cpu"), torch.float32)
-    trainer.restore(checkpoint_path(tmp_path))
+    trainer = PPOTrainer(c, make_plan(c), tmp_path)
+    trainer.restore(RunLayout(tmp_path).checkpoint)
     _assert_same(_snapshot(trainer), saved[2])
 
     # resuming continues at update 3, never redoes 1-2, and finishes
@@ -265,7 +270,7 @@ def test_stop_after_updates_then_resume(train_cfg, tmp_path):
     from swimrl.rl.curves import read_curves_csv
 
     assert train(train_cfg("train.stop_after_updates=3", "train.eval_every=0"), tmp_path) is None
-    assert load_file(checkpoint_path(tmp_path))["counters"]["updates"] == 3
+    assert load_file(RunLayout(tmp_path).checkpoint)["counters"]["updates"] == 3
     first = read_curves_csv(tmp_path / "curves.csv")
     assert sorted(first) == [80, 160, 240]
     # resumed from its committed record (checkpoint + curves.csv, the event files gone): the
@@ -450,8 +455,8 @@ def test_resume_a_checkpoint_written_before_the_key_renames(compose_cfg, tmp_pat
     overrides = [o.replace("episode.shape_factor_max", "swimmer.shape_factor_max")
                  for o in expected["overrides"]]
     overrides += ["optim.anneal=linear", "train.compile=false"]  # that code's defaults
-    checkpoint_path(tmp_path).parent.mkdir(parents=True)
-    shutil.copy(data / "last.pt", checkpoint_path(tmp_path))
+    RunLayout(tmp_path).checkpoint.parent.mkdir(parents=True)
+    shutil.copy(data / "last.pt", RunLayout(tmp_path).checkpoint)
     with pytest.raises(ConfigError, match="swimmer.shape_factor_max"):
         train(compose_cfg([*overrides, "resume=true", "swimmer.shape_factor_max=0.9"],
                           name="train"), tmp_path)
@@ -464,9 +469,8 @@ def _one_minibatch(trainer: PPOTrainer):
     """A fixed minibatch: one collected batch of the trainer's env, with GAE."""
     from swimrl.rl.builders import make_collector
 
-    collector = make_collector(
-        trainer.env, trainer.actor, trainer.plan, trainer.plan.frames_per_batch, "cpu"
-    )
+    t = trainer.cfg.train
+    collector = make_collector(trainer.env, trainer.actor, t, t.frames_per_batch, "cpu")
     data = next(iter(collector))
     collector.shutdown()
     with torch.no_grad():
@@ -487,7 +491,7 @@ def test_compiled_update_matches_eager(train_cfg, tmp_path, entropy_coeff):
     """``train.compile=true`` (torch.compile of loss + backward) gives the eager loss terms
     and gradients on a fixed minibatch, to float32 round-off."""
     c = train_config(train_cfg("train.compile=true", f"loss.entropy_coeff={entropy_coeff}"))
-    trainer = PPOTrainer(c, make_plan(c), tmp_path, torch.device("cpu"), torch.float32)
+    trainer = PPOTrainer(c, make_plan(c), tmp_path)
     batch = _one_minibatch(trainer)
     compiled = trainer._compiled_loss_backward()
     assert compiled is not trainer._loss_backward  # the compiled path is taken
@@ -531,10 +535,9 @@ def test_update_takes_the_minibatches_of_a_fresh_permutation_per_epoch(train_cfg
     from swimrl.rl.builders import make_collector
 
     c = train_config(train_cfg("train.compile=false"))
-    fast = PPOTrainer(c, make_plan(c), tmp_path / "a", torch.device("cpu"), torch.float32)
-    ref = PPOTrainer(c, make_plan(c), tmp_path / "b", torch.device("cpu"), torch.float32)
-    collector = make_collector(fast.env, fast.actor, fast.plan, 2 * fast.plan.frames_per_batch,
-                               "cpu")
+    fast = PPOTrainer(c, make_plan(c), tmp_path / "a")
+    ref = PPOTrainer(c, make_plan(c), tmp_path / "b")
+    collector = make_collector(fast.env, fast.actor, c.train, 2 * c.train.frames_per_batch, "cpu")
     batches = [b.clone() for b in collector]
     collector.shutdown()
 
@@ -542,8 +545,8 @@ def test_update_takes_the_minibatches_of_a_fresh_permutation_per_epoch(train_cfg
         with torch.no_grad():
             data = t.gae(data)
         flat = data.select(*t._loss_keys(data), strict=False).reshape(-1)
-        mb = t.plan.minibatch_size
-        for _ in range(t.plan.epochs):
+        mb = c.train.minibatch_size
+        for _ in range(c.train.epochs):
             perm = torch.randperm(flat.numel())
             for k in range(t.plan.minibatches_per_epoch):
                 t._loss_backward(flat[perm[k * mb : (k + 1) * mb]])
@@ -566,15 +569,15 @@ def test_update_takes_the_minibatches_of_a_fresh_permutation_per_epoch(train_cfg
         for p_a, p_b in zip(net_a.parameters(), net_b.parameters(), strict=True):
             assert torch.equal(p_a, p_b)
     assert any(not torch.equal(p, q) for p, q in
-               zip(fast.actor.parameters(), PPOTrainer(c, make_plan(c), tmp_path / "c",
-                   torch.device("cpu"), torch.float32).actor.parameters(), strict=True))
+               zip(fast.actor.parameters(),
+                   PPOTrainer(c, make_plan(c), tmp_path / "c").actor.parameters(), strict=True))
 
 
 def _params_after_updates(c, run_dir, batches) -> list[torch.Tensor]:
     """Actor and critic parameters after one :meth:`PPOTrainer.update` per batch (the
     minibatch order seeded per update)."""
     device = c.runtime.device
-    t = PPOTrainer(c, make_plan(c), run_dir, device, torch.float32)
+    t = PPOTrainer(c, make_plan(c), run_dir)
     for i, data in enumerate(batches):
         torch.manual_seed(100 + i)
         stats = t.update(data.clone().to(device))
@@ -585,8 +588,8 @@ def _params_after_updates(c, run_dir, batches) -> list[torch.Tensor]:
 def _batches(c, tmp_path, n: int = 3) -> list:
     from swimrl.rl.builders import make_collector
 
-    t = PPOTrainer(c, make_plan(c), tmp_path / "collect", c.runtime.device, torch.float32)
-    collector = make_collector(t.env, t.actor, t.plan, n * t.plan.frames_per_batch,
+    t = PPOTrainer(c, make_plan(c), tmp_path / "collect")
+    collector = make_collector(t.env, t.actor, c.train, n * c.train.frames_per_batch,
                                c.runtime.device)
     batches = [b.clone() for b in collector]
     collector.shutdown()
@@ -646,9 +649,10 @@ def test_parallel_preset_is_long_floor05_with_the_swimmer_parallel_layout():
     with initialize_config_module("swimrl.conf", version_base="1.3"):
         par = compose("train", overrides=["train_preset=parallel"])
         ref = compose("train", overrides=["train_preset=long_floor05"])
-    plan = validate_train_cfg(par)
-    assert plan.n_flows * plan.n_swimmers == 4096 and plan.rollout_steps == 16
-    assert plan.gradient_steps_per_update == 32 and plan.epochs == 4
+    c = train_config(par)
+    plan = make_plan(c)
+    assert c.train.n_flows * c.train.n_swimmers == 4096 and plan.rollout_steps == 16
+    assert plan.gradient_steps_per_update == 32 and c.train.epochs == 4
     assert par.optim.lr_actor == pytest.approx(3e-3 * math.sqrt(8192 / 2560), rel=0.01)
     assert par.optim.lr_critic == pytest.approx(1e-3 * math.sqrt(8192 / 2560), rel=0.01)
     for key in ("n_flows", "n_swimmers", "frames_per_batch", "minibatch_size", "eval_every"):
@@ -662,7 +666,7 @@ def test_parallel_layout_env_specs(compose_cfg):
     from torchrl.envs.utils import check_env_specs
 
     c = train_config(_parallel(compose_cfg))
-    env = make_env(c, make_plan(c))
+    env = _env(c, make_plan(c))
     assert tuple(env.batch_size) == (64, 64)
     check_env_specs(env)
 
@@ -672,7 +676,7 @@ def test_parallel_layout_two_updates_then_resume(compose_cfg, tmp_path):
     ``resume=true`` continues it with the second update of the same layout and finishes."""
     opts = ("train.total_frames=131072", "train.eval_every=1")
     assert train(_parallel(compose_cfg, "train.stop_after_updates=1", *opts), tmp_path) is None
-    ck = load_file(checkpoint_path(tmp_path))
+    ck = load_file(RunLayout(tmp_path).checkpoint)
     assert ck["counters"]["updates"] == 1 and ck["config"]["train"]["n_swimmers"] == 64
     m = train(_parallel(compose_cfg, "resume=true", *opts), tmp_path)
     assert m["training"]["updates"] == 2 and m["training"]["frames"] == 131072

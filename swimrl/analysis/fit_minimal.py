@@ -28,10 +28,11 @@ import torch
 from scipy.optimize import curve_fit
 
 from swimrl.env import SwimmerEnv
-from swimrl.errors import ConfigError, as_int
+from swimrl.errors import ConfigError, as_int, keep_number_types
 from swimrl.evaluation.rollout import EvalConfig, actor_for, chunk_seed, run_episodes
 from swimrl.flows.labels import ku_number
 from swimrl.policies.baselines import build_strategy, minimal_model
+from swimrl.policies.files import RunLayout
 
 
 @dataclass(frozen=True)
@@ -39,10 +40,11 @@ class FitConfig:
     """``swimrl-fit-minimal``: the strategy to sample and the decisions between samples."""
 
     eval: EvalConfig
-    sample_every: int = 20
+    sample_every: int
 
     def __post_init__(self) -> None:
         as_int("fit.sample_every", self.sample_every)
+        keep_number_types(self)
 
 
 def sample_strategy(env, actor, sample_every: int,
@@ -83,7 +85,7 @@ def read_coefficients(path: str | Path) -> tuple[str, tuple[float, ...]]:
     (a file, or the run directory holding it); the label is the run directory's name."""
     path = Path(path)
     if path.is_dir():
-        path = path / "fit.json"
+        path = RunLayout(path).fit
     if not path.is_file():
         raise ConfigError(f"compare.minimal_fits has {str(path)!r}: not a file; allowed the "
                           "fit.json (or its run directory) of swimrl-fit-minimal")

@@ -36,7 +36,7 @@ class GainScanConfig:
     setup: EvalSetup
     policy: str
     gains: tuple[float, ...]
-    overwrite: bool = False
+    overwrite: bool
 
     def __post_init__(self) -> None:
         require(bool(self.gains) and all(g >= 0 for g in self.gains), "gains", list(self.gains),

@@ -25,6 +25,7 @@ from swimrl.evaluation.records import markdown_table
 from swimrl.evaluation.statistics import mean_std_sem, paired_ratio
 from swimrl.flows.labels import ku_number
 from swimrl.policies.baselines import StrategyLabel
+from swimrl.policies.files import RunLayout
 
 #: The baseline rows every comparison must hold: STO and the paper's naive (Lambda = 0.98).
 STO, NAIVE = StrategyLabel("sto").label, StrategyLabel.naive(0.98).label
@@ -37,7 +38,7 @@ def load(paths: list[Path]) -> list[dict]:
         p = Path(p)
         if not p.exists():
             raise FileNotFoundError(f"no comparison.json at {p}: the path does not exist")
-        files += sorted(p.rglob("comparison.json")) if p.is_dir() else [p]
+        files += sorted(p.rglob(RunLayout(p).comparison.name)) if p.is_dir() else [p]
     if not files:
         raise FileNotFoundError(f"no comparison.json under {[str(p) for p in paths]}")
     recs = [json.loads(f.read_text()) for f in files]

@@ -26,6 +26,7 @@ from swimrl.evaluation.statistics import mean_std_sem
 from swimrl.flows.labels import ku_display
 from swimrl.physics.signals import SIGNAL_NAMES
 from swimrl.policies.baselines import StrategyLabel
+from swimrl.policies.files import RunLayout
 
 from .training_curves import PAPER_EPISODE_FRAMES
 
@@ -85,7 +86,8 @@ def set_label(signals: tuple[str, ...]) -> str:
 def _run(cmp_path: Path) -> AblationRun | None:
     """The run in ``cmp_path.parent``, or None without ``metrics.json``; raises ValueError
     (one line) where the comparison is not this run's."""
-    metrics_path = cmp_path.parent / "metrics.json"
+    run = RunLayout(cmp_path.parent)
+    metrics_path = run.metrics
     if not metrics_path.is_file():
         return None
     cmp = json.loads(cmp_path.read_text())
@@ -99,7 +101,7 @@ def _run(cmp_path: Path) -> AblationRun | None:
         raise ValueError(f"{cmp_path}: its policy row is not the final evaluation in "
                          f"{metrics_path} (per-flow R_hat differ): a stale comparison")
     cfg = metrics["config"]
-    curve_path = cmp_path.parent / "curves.csv"
+    curve_path = run.curves
     curve = read_curves(curve_path) if curve_path.is_file() else {}
     has_eval = "eval/R_hat" in curve and np.isfinite(curve["eval/R_hat"]).any()
     return AblationRun(
@@ -118,7 +120,8 @@ def read_ablation(root: Path) -> list[AblationRun]:
     budgets or held-out sizes (the paper's ablation trains and evaluates every set alike), a
     signal set and seed found twice, or a comparison that is not its run's (first row not
     STO, no policy row, or a policy row other than the run's final evaluation)."""
-    runs = [r for p in sorted(Path(root).rglob("comparison.json")) if (r := _run(p))]
+    name = RunLayout(root).comparison.name
+    runs = [r for p in sorted(Path(root).rglob(name)) if (r := _run(p))]
     for key in ("kubo", "frames", "held_out"):
         values = sorted({getattr(r, key) for r in runs})
         if len(values) > 1:

@@ -20,6 +20,7 @@ from pathlib import Path
 
 from swimrl.evaluation.records import csv_table, flatten, markdown_table
 from swimrl.evaluation.statistics import mean_std_sem
+from swimrl.policies.files import RunLayout
 
 #: Keys never shown as swept: runtime settings, progress flags, bookkeeping.
 IGNORED_KEYS = {
@@ -53,7 +54,7 @@ def _records_from(path: Path, root: Path) -> list[dict]:
     data = json.loads(path.read_text())
     run = str(path.parent.relative_to(root)) or "."
     config = flatten(data.get("config", {}))
-    if path.name == "comparison.json":
+    if path.name == RunLayout(path.parent).comparison.name:
         return [
             {
                 "run": run,
@@ -87,9 +88,10 @@ def _records_from(path: Path, root: Path) -> list[dict]:
 def collect(root: Path) -> list[dict]:
     """All result records below ``root`` (sorted by path)."""
     root = Path(root)
+    run = RunLayout(root)
     files = sorted(
         p
-        for name in ("metrics.json", "comparison.json")
+        for name in (run.metrics.name, run.comparison.name)
         for p in root.rglob(name)
         if ".hydra" not in p.parts
     )

@@ -32,12 +32,11 @@ from hydra.experimental.callback import Callback
 from omegaconf import DictConfig, OmegaConf
 
 from swimrl.errors import BadFileError, ConfigError, IntegrityError, NonFiniteError
+from swimrl.policies.files import RunLayout
 
 #: The configs shipped with the package (the repository's top-level ``conf/``).
 CONFIG_PATH = "pkg://swimrl.conf"
 USAGE_ERRORS = (ConfigError, BadFileError, FileExistsError, FileNotFoundError)
-#: Result files whose presence marks a run directory as finished.
-RESULT_FILES = ("metrics.json", "comparison.json", "fit.json", "gain_scan.json")
 #: ``check(cfg, out)`` of each Hydra config name; ``out`` is the run directory, or None in a
 #: multirun (the job directories are not known yet).
 CHECKS: dict[str, Callable[[DictConfig, Path | None], object]] = {}
@@ -90,8 +89,9 @@ def one_line_errors(task: Callable) -> Callable:
 
 def provenance_subdir(output_dir: str, overwrite) -> str | None:
     """``hydra.output_subdir``: ``.hydra``, or None (Hydra then writes no config files) when
-    ``output_dir`` holds a result (:data:`RESULT_FILES`) and ``overwrite`` is not true."""
-    finished = any((Path(output_dir) / name).exists() for name in RESULT_FILES)
+    ``output_dir`` holds a result (:attr:`~swimrl.policies.files.RunLayout.results`) and
+    ``overwrite`` is not true."""
+    finished = any(path.exists() for path in RunLayout(output_dir).results)
     return None if finished and overwrite is not True else ".hydra"
 
 

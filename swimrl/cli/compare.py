@@ -30,10 +30,11 @@ from swimrl.analysis.plots import plot_naive_scan
 from swimrl.cli import command, run_dir
 from swimrl.config import compare_config
 from swimrl.errors import ConfigError
-from swimrl.evaluation.compare import PARTIAL, CompareConfig, compare
+from swimrl.evaluation.compare import CompareConfig, compare
 from swimrl.evaluation.jobs import preemption_signals, refuse_if_locked, run_lock
 from swimrl.evaluation.records import refuse_overwrite, write_comparison
 from swimrl.evaluation.rollout import check_eval_memory
+from swimrl.policies.files import RunLayout
 
 log = logging.getLogger(__name__)
 
@@ -43,30 +44,31 @@ def check(cfg: DictConfig, out: Path | None) -> CompareConfig:
     replace a result or to drop an unfinished one."""
     c = compare_config(cfg)
     if out is not None:
+        run = RunLayout(out)
         refuse_if_locked(out)
-        refuse_overwrite(out / "comparison.json", c.overwrite or c.resume)
-        if (out / PARTIAL).exists() and not (c.resume or c.overwrite):
-            raise ConfigError(f"compare.resume=false but {out / PARTIAL} holds an unfinished "
-                              "comparison: allowed compare.resume=true (continue it) or "
-                              "overwrite=true (start again)")
+        refuse_overwrite(run.comparison, c.overwrite or c.resume)
+        if run.comparison_partial.exists() and not (c.resume or c.overwrite):
+            raise ConfigError(f"compare.resume=false but {run.comparison_partial} holds an "
+                              "unfinished comparison: allowed compare.resume=true (continue "
+                              "it) or overwrite=true (start again)")
     check_eval_memory(c.setup, len(c.variants) if c.shared_flows else 1)
     return c
 
 
 def _main(cfg: DictConfig) -> dict:
     out = run_dir()
+    run = RunLayout(out)
     with run_lock(out, "swimrl-compare"):
         c = check(cfg, out)  # again, holding the lock
-        if c.resume and not c.overwrite and (out / "comparison.json").exists():
-            log.info("compare.resume=true: %s is complete, nothing to do",
-                     out / "comparison.json")
-            return json.loads((out / "comparison.json").read_text())
+        if c.resume and not c.overwrite and run.comparison.exists():
+            log.info("compare.resume=true: %s is complete, nothing to do", run.comparison)
+            return json.loads(run.comparison.read_text())
         with preemption_signals() as preemption:
-            record = compare(c, out / PARTIAL, preemption)
+            record = compare(c, run.comparison_partial, preemption)
         print(write_comparison(record, out), flush=True)
-        (out / PARTIAL).unlink(missing_ok=True)
-        plot_naive_scan(record, out / "naive_scan.png")
-        log.info("wrote %s", out / "comparison.json")
+        run.comparison_partial.unlink(missing_ok=True)
+        plot_naive_scan(record, run.naive_scan_plot)
+        log.info("wrote %s", run.comparison)
         return record
 
 

@@ -13,14 +13,14 @@ import torch
 from omegaconf import DictConfig, OmegaConf
 
 from swimrl.cli import command
-from swimrl.config import dns_run, runtime
+from swimrl.config import dns_run, dns_runtime
 from swimrl.flows.dns.run import check_run, run_dns, summary
 
 
 @command("dns", check=lambda cfg, out: check_run(dns_run(cfg)))
 def main(cfg: DictConfig) -> None:
     run = dns_run(cfg)
-    threads = runtime(cfg).threads
+    threads = dns_runtime(cfg).threads
     if threads:  # null: torch's default
         torch.set_num_threads(threads)
     path = run_dns(run)

@@ -18,7 +18,8 @@ from swimrl.config import eval_config
 from swimrl.evaluation.jobs import refuse_if_locked, run_lock
 from swimrl.evaluation.records import refuse_overwrite, summary_line, write_json
 from swimrl.evaluation.rollout import Actor, EvalConfig, actor_for, check_eval_memory, evaluate
-from swimrl.evaluation.trajectories import TRAJECTORY_FILE, TrajectoryRecorder, save_trajectories
+from swimrl.evaluation.trajectories import TrajectoryRecorder, save_trajectories
+from swimrl.policies.files import RunLayout
 
 log = logging.getLogger(__name__)
 
@@ -43,14 +44,15 @@ def check(cfg: DictConfig, out: Path | None) -> tuple[EvalConfig, Actor]:
     c = eval_config(cfg)
     if out is not None:
         refuse_if_locked(out)
-        refuse_overwrite(out / "metrics.json", c.overwrite)
+        refuse_overwrite(RunLayout(out).metrics, c.overwrite)
     check_eval_memory(c.setup)
     return c, load_actor(c)
 
 
 @command("evaluate", check=check)
 def main(cfg: DictConfig) -> dict:
-    target = run_dir() / "metrics.json"
+    run = RunLayout(run_dir())
+    target = run.metrics
     with run_lock(run_dir(), "swimrl-eval"):  # one process per run directory
         c, actor = check(cfg, run_dir())
         _LOADED.clear()  # a multirun's next job reads its policy file again
@@ -58,7 +60,7 @@ def main(cfg: DictConfig) -> dict:
         recorder = TrajectoryRecorder(n_record) if n_record else None
         metrics = evaluate(c.setup, actor, c.strategy.name, recorder)
         if recorder is not None:
-            path = save_trajectories(recorder.arrays(), run_dir() / TRAJECTORY_FILE,
+            path = save_trajectories(recorder.arrays(), run.trajectories,
                                      [c.strategy.name], c.setup.record)
             log.info("wrote %s", path)
         write_json(metrics, target, c.overwrite)

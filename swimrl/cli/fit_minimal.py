@@ -16,20 +16,21 @@ from swimrl.analysis.fit_minimal import FitConfig, run_fit
 from swimrl.cli import command, run_dir
 from swimrl.config import fit_config
 from swimrl.evaluation.records import refuse_overwrite, write_json
+from swimrl.policies.files import RunLayout
 
 
 def check(cfg: DictConfig, out: Path | None) -> FitConfig:
     """Parse and check the config; refuse to replace a result."""
     c = fit_config(cfg)
     if out is not None:
-        refuse_overwrite(out / "fit.json", c.eval.overwrite)
+        refuse_overwrite(RunLayout(out).fit, c.eval.overwrite)
     return c
 
 
 @command("fit_minimal", check=check)
 def main(cfg: DictConfig) -> dict:
     c = check(cfg, run_dir())
-    out = run_dir() / "fit.json"
+    out = RunLayout(run_dir()).fit
     record = run_fit(c)
     write_json(record, out)
     co, e = record["coefficients"], record["stderr"]

@@ -19,10 +19,9 @@ from swimrl.atomic import atomic_write_text
 from swimrl.cli import command, run_dir
 from swimrl.config import gain_scan_config
 from swimrl.evaluation.records import refuse_overwrite, write_json
+from swimrl.policies.files import RunLayout
 
 log = logging.getLogger(__name__)
-RECORD = "gain_scan.json"
-TABLE = "gain_scan.md"
 
 
 def check(cfg: DictConfig, out: Path | None) -> GainScanConfig:
@@ -30,21 +29,23 @@ def check(cfg: DictConfig, out: Path | None) -> GainScanConfig:
     ``overwrite``."""
     c = gain_scan_config(cfg)
     if out is not None:
-        for name in (RECORD, TABLE):
-            refuse_overwrite(out / name, c.overwrite)
+        run = RunLayout(out)
+        for path in (run.gain_scan, run.gain_scan_table):
+            refuse_overwrite(path, c.overwrite)
     return c
 
 
 @command("gain_scan", check=check)
 def main(cfg: DictConfig) -> list[dict]:
     out = run_dir()
+    run = RunLayout(out)
     c = check(cfg, out)
     rows = gain_scan(c)
     table = markdown(rows)
     print(table)
-    atomic_write_text(out / TABLE, table)
+    atomic_write_text(run.gain_scan_table, table)
     record = {"policy": c.policy, "gains": list(c.gains), "rows": rows, "config": c.setup.record}
-    target = write_json(record, out / RECORD, overwrite=c.overwrite)  # last: marks it finished
+    target = write_json(record, run.gain_scan, overwrite=c.overwrite)  # last: marks it finished
     log.info("wrote %s", target)
     return rows
 

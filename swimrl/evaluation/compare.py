@@ -28,16 +28,13 @@ from pathlib import Path
 import numpy as np
 import torch
 
-from swimrl.errors import BadFileError, ConfigError
+from swimrl.errors import BadFileError, ConfigError, as_bool
 from swimrl.policies.baselines import STRATEGIES, StrategyLabel, StrategySpec
 
 from .jobs import Preemption
 from .records import summary_line, write_json
 from .rollout import Actor, EvalSetup, actor_for, check_chunks, evaluate_shared, flow_chunks
 from .statistics import paired_ratio
-
-#: The resumable state of an unfinished comparison, in its run directory.
-PARTIAL = "comparison.partial.json"
 
 #: Config keys that do not change a comparison's results (left out of a partial's identity).
 NOT_IDENTITY = (("overwrite",), ("threads",), ("eval", "progress"), ("compare", "resume"))
@@ -54,13 +51,21 @@ class Variant:
 
 @dataclass(frozen=True)
 class CompareConfig:
-    """``swimrl-compare``: the variants, evaluated on ``setup`` (shared flows or one by one)."""
+    """``swimrl-compare``: the variants, evaluated on ``setup`` (shared flows or one by one).
+    The defaults are ``conf/compare.yaml``'s (``tests/test_config_sources.py``)."""
 
     setup: EvalSetup
     variants: tuple[Variant, ...]
     shared_flows: bool = False
     overwrite: bool = False
     resume: bool = False
+
+    def __post_init__(self) -> None:
+        for v in self.variants:
+            v.strategy.check_bound(self.setup.params.shape_factor_max)
+        as_bool("compare.shared_flows", self.shared_flows)
+        as_bool("overwrite", self.overwrite)
+        as_bool("compare.resume", self.resume)
 
 
 def strategy_variants(
@@ -70,10 +75,10 @@ def strategy_variants(
     policies: Sequence[str] = (),
     minimal_fits: Sequence[tuple[str, Sequence[float]]] = (),
 ) -> tuple[Variant, ...]:
-    """Variants of ``compare.strategies``: ``naive`` expands over ``naive_shape_factors``,
-    ``minimal`` takes the ``minimal`` coefficients c1..c4, or expands over the labelled
-    ``minimal_fits`` where given, and ``policy`` expands over ``policies`` (run dirs,
-    checkpoints, ``pretrained/NAME``)."""
+    """Variants of ``compare.strategies`` (the keyword defaults: ``conf/compare.yaml``'s):
+    ``naive`` expands over ``naive_shape_factors``, ``minimal`` takes the ``minimal``
+    coefficients c1..c4, or expands over the labelled ``minimal_fits`` where given, and
+    ``policy`` expands over ``policies`` (run dirs, checkpoints, ``pretrained/NAME``)."""
     allowed = "a list of 'naive', 'sto', 'minimal', 'policy'"
     labels = [label for label, _ in minimal_fits]
     if minimal_fits and "minimal" not in strategies:
@@ -136,8 +141,9 @@ def identity(cfg: CompareConfig, actors: Sequence[Actor]) -> dict:
 
 
 def load_partial(path: Path, expected: dict) -> dict:
-    """The chunk results of ``path`` (:data:`PARTIAL`), refused (ConfigError) unless they were
-    computed for ``expected`` (:func:`identity`)."""
+    """The chunk results of ``path`` (a run directory's ``comparison.partial.json``,
+    :attr:`~swimrl.policies.files.RunLayout.comparison_partial`), refused (ConfigError) unless
+    they were computed for ``expected`` (:func:`identity`)."""
     try:
         saved = json.loads(Path(path).read_text())
     except (OSError, UnicodeDecodeError, json.JSONDecodeError) as exc:
@@ -164,11 +170,11 @@ def _first_difference(a: object, b: object, key: str = "") -> str:
 def compare(cfg: CompareConfig, partial: Path | None = None,
             preemption: Preemption | None = None) -> dict:
     """Evaluate all variants (every policy loaded first) and return the comparison record;
-    with ``partial`` (a :data:`PARTIAL` path) the chunk results are saved there as they come
-    and, with ``cfg.resume``, the ones already there are reused. A ``preemption`` requested
-    (a signal, :mod:`.jobs`) stops the comparison after the chunk in flight, once ``partial``
-    holds it (:meth:`~.jobs.Preemption.stop`: exit status :data:`~.jobs.PREEMPTED_EXIT`),
-    unless no chunk is left to do."""
+    with ``partial`` (a run directory's ``comparison.partial.json``) the chunk results are
+    saved there as they come and, with ``cfg.resume``, the ones already there are reused. A
+    ``preemption`` requested (a signal, :mod:`.jobs`) stops the comparison after the chunk in
+    flight, once ``partial`` holds it (:meth:`~.jobs.Preemption.stop`: exit status
+    :data:`~.jobs.PREEMPTED_EXIT`), unless no chunk is left to do."""
     setup = cfg.setup
     actors = [actor_for(v.strategy, v.policy, setup.params) for v in cfg.variants]
     n = len(actors)

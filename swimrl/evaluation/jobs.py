@@ -22,13 +22,13 @@ thread, never over an ignored signal (``SIG_IGN``), and the previous ones are re
 leaving the context.
 
 **One writer per run directory.** :func:`run_lock` holds an exclusive ``flock`` on
-``<run dir>/.lock`` (:data:`LOCK_FILE`, one JSON line: the holder's ``pid``, ``host``,
-``command`` and start time ``since``) for the whole run; a second process on the same
-directory gets :class:`RunDirInUseError` (a ``FileExistsError``: one line, exit status 2) naming
-the holder. The kernel releases the lock when its process dies, so a lock file left by a
-killed process does not block (its content is overwritten); the holder deletes the file
-when it releases the lock. :func:`refuse_if_locked` is the same test without taking the
-lock, for the checks that run before Hydra writes into the run directory.
+``<run dir>/.lock`` (:attr:`RunLayout.lock <swimrl.policies.files.RunLayout.lock>`, one JSON line:
+the holder's ``pid``, ``host``, ``command`` and start time ``since``) for the whole run; a
+second process on the same directory gets :class:`RunDirInUseError` (a ``FileExistsError``:
+one line, exit status 2) naming the holder. The kernel releases the lock when its process
+dies, so a lock file left by a killed process does not block (its content is overwritten); the
+holder deletes the file when it releases the lock. :func:`refuse_if_locked` is the same test
+without taking the lock, for the checks that run before Hydra writes into the run directory.
 """
 
 from __future__ import annotations
@@ -49,6 +49,8 @@ from datetime import datetime, timezone
 from pathlib import Path
 from typing import NoReturn
 
+from swimrl.policies.files import RunLayout
+
 log = logging.getLogger(__name__)
 
 #: Exit status of a preempted run: ``EX_TEMPFAIL`` of ``sysexits.h`` ("temporary failure,
@@ -63,10 +65,6 @@ SIGNALS = (signal.SIGTERM, signal.SIGUSR1)
 #: Signals taken over (and chained) only where a Python handler is installed for them:
 #: submitit's requeue signal.
 CHAINED_SIGNALS = (signal.SIGUSR2,)
-
-#: The lock file in a run directory (:func:`run_lock`).
-LOCK_FILE = ".lock"
-
 
 class Preempted(SystemExit):
     """A run stopped by a preemption signal after saving its state: exits the process with
@@ -195,7 +193,7 @@ def refuse_if_locked(run_dir: Path | None) -> None:
     """:class:`RunDirInUseError` if another process holds ``run_dir``'s lock; creates nothing."""
     if run_dir is None:
         return
-    path = Path(run_dir) / LOCK_FILE
+    path = RunLayout(run_dir).lock
     if path.resolve() in _HELD:
         return
     try:
@@ -215,7 +213,7 @@ def run_lock(run_dir: Path, command: str | None = None) -> Iterator[Path]:
     raise :class:`RunDirInUseError` naming the holder; yields the lock file's path."""
     run_dir = Path(run_dir)
     run_dir.mkdir(parents=True, exist_ok=True)
-    path = run_dir / LOCK_FILE
+    path = RunLayout(run_dir).lock
     while True:
         fd = os.open(path, os.O_RDWR | os.O_CREAT, 0o644)
         taken = _flock(fd, fcntl.LOCK_EX, path)

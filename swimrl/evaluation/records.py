@@ -21,6 +21,7 @@ import numpy as np
 from swimrl.atomic import atomic_write, atomic_write_text
 from swimrl.errors import NonFiniteError
 from swimrl.flows.labels import flow_display
+from swimrl.policies.files import RunLayout
 
 
 def refuse_overwrite(path: Path, overwrite: bool) -> None:
@@ -71,7 +72,7 @@ def read_curves(path: Path) -> dict[str, np.ndarray]:
     arrays, NaN where a cell is empty."""
     path = Path(path)
     if path.is_dir():
-        path = path / "curves.csv"
+        path = RunLayout(path).curves
     with open(path, newline="") as fh:
         rows = list(csv.DictReader(fh))
     if not rows:
@@ -138,7 +139,8 @@ def comparison_markdown(record: dict) -> str:
 
 def write_comparison(record: dict, out: Path) -> str:
     """``comparison.json`` (atomic) and ``comparison.md`` in ``out``; returns the table."""
-    write_json(record, Path(out) / "comparison.json")
+    run = RunLayout(out)
+    write_json(record, run.comparison)
     table = comparison_markdown(record)
-    atomic_write_text(Path(out) / "comparison.md", table)
+    atomic_write_text(run.comparison_table, table)
     return table

@@ -28,7 +28,7 @@ from torch import nn
 from tqdm.auto import tqdm
 
 from swimrl.env import EnvParams, SwimmerEnv
-from swimrl.errors import ConfigError, as_int, require
+from swimrl.errors import ConfigError, as_bool, as_int, keep_number_types, require
 from swimrl.flows.build import FLOW_WORK_BYTES, FlowSpec, StoredRunSpec, flow_table_bytes
 from swimrl.flows.dns.store import store_record
 from swimrl.policies.baselines import StrategySpec, build_strategy
@@ -49,17 +49,19 @@ class EvalSizes:
     number of swimmers per flow whose every decision is recorded (``record``, 0: none; see
     :mod:`swimrl.evaluation.trajectories`)."""
 
-    n_flows: int = 10
-    n_swimmers: int = 200
-    flows_per_batch: int = 10
-    progress: bool = True
-    record: int = 0
+    n_flows: int
+    n_swimmers: int
+    flows_per_batch: int
+    progress: bool
+    record: int = 0  # conf/evaluate.yaml's eval.record (tests/test_config_sources.py)
 
     def __post_init__(self) -> None:
+        as_bool("eval.progress", self.progress)
         for key in ("n_flows", "n_swimmers", "flows_per_batch"):
             as_int(f"eval.{key}", getattr(self, key))
         require(as_int("eval.record", self.record, low=0) <= self.n_swimmers, "eval.record",
                 self.record, f"an integer in [0, eval.n_swimmers={self.n_swimmers}]")
+        keep_number_types(self)
 
 
 @dataclass(frozen=True)
@@ -74,9 +76,12 @@ class EvalSetup:
     seed: int
     record: dict
 
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "seed", as_int("seed", self.seed, low=0))
+
     def resized(self, n_flows: int, n_swimmers: int) -> EvalSetup:
         """The same setup with ``n_flows x n_swimmers`` and no progress bar."""
-        sizes = EvalSizes(n_flows, n_swimmers, min(self.sizes.flows_per_batch, n_flows), False)
+        sizes = EvalSizes(n_flows, n_swimmers, min(self.sizes.flows_per_batch, n_flows), False, 0)
         return replace(self, sizes=sizes)
 
 
@@ -86,10 +91,13 @@ class EvalConfig:
 
     setup: EvalSetup
     strategy: StrategySpec
-    policy: str | None = None
-    overwrite: bool = False
+    policy: str | None
+    overwrite: bool
 
     def __post_init__(self) -> None:
+        if self.policy is not None:
+            object.__setattr__(self, "policy", str(self.policy))
+        as_bool("overwrite", self.overwrite)
         if self.strategy.name == "policy" and self.policy is None:
             raise ConfigError(
                 "policy=None is invalid: strategy=policy needs policy=<run dir | checkpoint | "

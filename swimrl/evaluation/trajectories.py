@@ -34,9 +34,6 @@ from swimrl.physics.signals import SIGNAL_NAMES
 
 from .records import write_npz
 
-#: File name of a trajectory record, next to ``metrics.json``.
-TRAJECTORY_FILE = "trajectories.npz"
-
 
 class TrajectoryRecorder:
     """Collects every decision of the first ``n`` swimmers of each flow and strategy block."""

@@ -14,7 +14,15 @@ from pathlib import Path
 
 import torch
 
-from swimrl.errors import as_float, as_int, key_prefix, one_of, require
+from swimrl.errors import (
+    as_bool,
+    as_float,
+    as_int,
+    keep_number_types,
+    key_prefix,
+    one_of,
+    require,
+)
 from swimrl.flows.base import GriddedFlow
 from swimrl.flows.dns.params import DNSParams
 from swimrl.flows.dns.spinup import SpinupSchedule
@@ -36,7 +44,8 @@ class StochasticSpec:
     """``flow=stochastic``: the paper's flow at Kubo number ``kubo`` (Sec. II B).
 
     ``basis``, ``basis_seed``, ``amplitudes``, ``velocity_scale``: readings of the paper's
-    text, defaults as written (:mod:`swimrl.flows.stochastic`).
+    text, defaults as written (:mod:`swimrl.flows.stochastic`). The defaults (for library
+    calls) are ``conf/flow/stochastic.yaml``'s values (``tests/test_config_sources.py``).
     """
 
     kubo: float
@@ -59,13 +68,15 @@ class StochasticSpec:
         as_int("flow.basis_seed", self.basis_seed, low=0)
         one_of("flow.amplitudes", self.amplitudes, AMPLITUDE_MODES)
         one_of("flow.velocity_scale", self.velocity_scale, VELOCITY_SCALES)
+        keep_number_types(self)
 
 
 @dataclass(frozen=True)
 class StoredRunSpec:
     """``flow=dns_replay``: runs stored by ``swimrl-dns`` at ``paths`` (one or several
     independent realisations), decoded on ``decode_n`` nodes per side (None: the run's
-    grid), ``flows_per_start`` flows sharing each drawn (run, start time)."""
+    grid), ``flows_per_start`` flows sharing each drawn (run, start time). The defaults are
+    ``conf/flow/dns_replay.yaml``'s (``tests/test_config_sources.py``)."""
 
     paths: tuple[Path, ...]
     allow_incomplete: bool = False
@@ -74,6 +85,7 @@ class StoredRunSpec:
     name: str = "dns_replay"
 
     def __post_init__(self) -> None:
+        as_bool("flow.allow_incomplete", self.allow_incomplete)
         require(len(self.paths) > 0, "flow.path", "[]", "a store path or a list of them")
         require(len(set(self.paths)) == len(self.paths), "flow.path",
                 [str(p) for p in self.paths], "distinct stores")
@@ -88,6 +100,7 @@ class StoredRunSpec:
             n = as_int("flow.decode_n", self.decode_n, low=8)
             require(n % 2 == 0, "flow.decode_n", n, "null or an even integer >= 8")
         as_int("flow.flows_per_start", self.flows_per_start, low=1)
+        keep_number_types(self)
 
     @property
     def path(self) -> Path:
@@ -111,6 +124,7 @@ class LiveDNSSpec:
         as_float("flow.spinup.measure_time", self.measure_time,
                  lambda v: 0 < v <= self.spinup_time,
                  f"in (0, flow.spinup.time={self.spinup_time}]")
+        keep_number_types(self)
 
     @property
     def spinup(self) -> SpinupSchedule:

@@ -202,7 +202,8 @@ class StochasticFlow(GriddedFlow):
     Each realisation has its own ``M`` components ``psi_i`` and coefficients ``c_i``;
     :meth:`reset` redraws both for the selected flows (with ``basis="fixed"``: only the
     ``c_i``, every realisation sharing one set of ``psi_i``). ``amplitudes`` and
-    ``velocity_scale``: see the module docstring.
+    ``velocity_scale``: see the module docstring. The keyword defaults (for library calls)
+    are ``conf/flow/stochastic.yaml``'s values (``tests/test_config_sources.py``).
     """
 
     u_rms = 1.0

@@ -29,7 +29,7 @@ from torch import nn
 from torchrl.data import Bounded, Composite
 from torchrl.modules import ProbabilisticActor, TanhNormal, ValueOperator
 
-from swimrl.errors import as_float, as_int, one_of, require
+from swimrl.errors import as_float, as_int, keep_number_types, one_of, require
 
 ACTIVATIONS = {"tanh": nn.Tanh, "relu": nn.ReLU, "elu": nn.ELU}
 #: ``model.min_std`` that bounds nothing in practice (TorchRL's default ``scale_lb``): the
@@ -40,22 +40,26 @@ NO_STD_BOUND = 1e-4
 @dataclass(frozen=True)
 class ModelSpec:
     """Shape of actor and critic (``model.*``): hidden widths, activation, initial ``sigma``
-    and its lower bound ``sigma_min``."""
+    and its lower bound ``sigma_min``. (The keyword defaults of :func:`make_mlp`,
+    :func:`tanh_normal_actor` and :func:`value_critic` are ``conf/train.yaml``'s ``model.*``,
+    ``tests/test_config_sources.py``.)"""
 
-    hidden: tuple[int, ...] = (64, 64)
-    activation: str = "tanh"
-    init_std: float = 1.0
-    min_std: float = NO_STD_BOUND
+    hidden: tuple[int, ...]
+    activation: str
+    init_std: float
+    min_std: float
 
     def __post_init__(self) -> None:
         require(len(self.hidden) > 0, "model.hidden", list(self.hidden),
                 "a non-empty list of positive layer widths")
         for h in self.hidden:
             as_int("model.hidden", h)
+        object.__setattr__(self, "activation", str(self.activation))
         one_of("model.activation", self.activation, ACTIVATIONS)
         as_float("model.init_std", self.init_std, lambda v: v > 0, "> 0")
         as_float("model.min_std", self.min_std, lambda v: 0 < v <= self.init_std,
                  f"in (0, model.init_std = {self.init_std}]")
+        keep_number_types(self)
 
 
 def make_mlp(

@@ -2,6 +2,8 @@ r"""Small builders of the PPO pipeline, in the style of TorchRL's ``sota-impleme
 
 ``make_env`` -> ``make_actor``/``make_critic`` -> ``make_collector`` -> ``make_loss``
 (``ClipPPOLoss`` + ``GAE``) -> ``make_optimizers``/``make_schedulers`` -> ``make_logger``.
+Each takes the typed part of the config it needs (``cfg.model``, ``cfg.loss``, ``cfg.optim``,
+``cfg.train``, the runtime), whose constructor has checked the values and their types.
 
 Reward scaling (``train.reward_scale``): the step reward ``r_i`` (paper ``eq:reward``) is a
 radial displacement, at most ``v_s T_u ~ 0.035`` flow units per decision. The training env
@@ -23,9 +25,12 @@ from torchrl.objectives import ClipPPOLoss
 from torchrl.objectives.value import GAE
 from torchrl.record.loggers.tensorboard import TensorboardLogger
 
-from swimrl.env import SwimmerEnv
-from swimrl.policies.networks import tanh_normal_actor, value_critic
-from swimrl.rl.plan import TrainConfig, TrainPlan, TrainSettings
+from swimrl.env import EnvParams, SwimmerEnv
+from swimrl.flows.build import FlowSpec
+from swimrl.policies.files import RunLayout
+from swimrl.policies.networks import ModelSpec, tanh_normal_actor, value_critic
+from swimrl.rl.plan import LossSettings, OptimSettings, TrainSettings
+from swimrl.runtime import Runtime
 
 
 def auto_reward_scale(env: SwimmerEnv, gamma: float) -> float:
@@ -38,17 +43,16 @@ def auto_reward_scale(env: SwimmerEnv, gamma: float) -> float:
     return (1.0 - gamma) / per_step
 
 
-def make_env(cfg: TrainConfig, plan: TrainPlan) -> TransformedEnv:
-    """Training env: ``n_flows x n_swimmers`` swimmers seeded with the training stream, with
-    the reward multiplied by the reward scale."""
-    base = SwimmerEnv.build(
-        cfg.evaluation.flow, plan.params, cfg.runtime, plan.n_flows, plan.n_swimmers,
-        plan.train_seed,
-    )
-    scale = plan.reward_scale
+def make_env(flow: FlowSpec, params: EnvParams, runtime: Runtime, train: TrainSettings,
+             loss: LossSettings, seed: int) -> TransformedEnv:
+    """Training env: ``train.n_flows x train.n_swimmers`` swimmers in ``flow``, seeded with
+    ``seed`` (the training stream, :func:`~swimrl.rl.plan.training_seed`), with the reward
+    multiplied by ``train.reward_scale`` (None: :func:`auto_reward_scale` at ``loss.gamma``)."""
+    base = SwimmerEnv.build(flow, params, runtime, train.n_flows, train.n_swimmers, seed)
+    scale = train.reward_scale
     if scale is None:
-        scale = auto_reward_scale(base, float(cfg.loss.gamma))
-    return TransformedEnv(base, RewardScaling(loc=0.0, scale=float(scale)))
+        scale = auto_reward_scale(base, loss.gamma)
+    return TransformedEnv(base, RewardScaling(loc=0.0, scale=scale))
 
 
 def base_env(env: EnvBase) -> SwimmerEnv:
@@ -61,91 +65,91 @@ def reward_scale_of(env: TransformedEnv) -> float:
     return float(env.transform.scale)
 
 
-def make_actor(cfg: TrainConfig, env: EnvBase, device, dtype):
+def make_actor(model: ModelSpec, env: EnvBase, runtime: Runtime):
     """Actor on the env's observation, bounded by its action spec (the ``TanhNormal``'s
     ``low``/``high``; see :func:`swimrl.policies.networks.tanh_normal_actor`)."""
     return tanh_normal_actor(
         env.observation_spec["observation"].shape[-1],
         env.action_spec_unbatched,
-        hidden=[int(h) for h in cfg.model.hidden],
-        activation=str(cfg.model.activation),
-        init_std=float(cfg.model.init_std),
-        min_std=float(cfg.model.min_std),
-        device=device,
-        dtype=dtype,
+        hidden=list(model.hidden),
+        activation=model.activation,
+        init_std=model.init_std,
+        min_std=model.min_std,
+        device=runtime.device,
+        dtype=runtime.dtype,
     )
 
 
-def make_critic(cfg: TrainConfig, env: EnvBase, device, dtype):
+def make_critic(model: ModelSpec, env: EnvBase, runtime: Runtime):
     """Critic ``V(observation)``."""
     return value_critic(
         env.observation_spec["observation"].shape[-1],
-        hidden=[int(h) for h in cfg.model.hidden],
-        activation=str(cfg.model.activation),
-        device=device,
-        dtype=dtype,
+        hidden=list(model.hidden),
+        activation=model.activation,
+        device=runtime.device,
+        dtype=runtime.dtype,
     )
 
 
-def make_collector(env: EnvBase, actor, plan: TrainPlan, total_frames: int, device,
-                   settings: TrainSettings | None = None) -> Collector:
-    """TorchRL ``Collector`` over the batched env; output batches ``(F, S, L)`` (time last).
+def make_collector(env: EnvBase, actor, train: TrainSettings, total_frames: int,
+                   device) -> Collector:
+    """TorchRL ``Collector`` over the batched env, ``train.frames_per_batch`` frames per
+    batch; output batches ``(F, S, L)`` (time last).
 
     The env truncates episodes itself after ``N`` decisions; the collector resets the done
     swimmers (partial ``_reset``), so rollouts run across episode boundaries. On CUDA
-    (``train.cudagraphs`` in ``settings``) the collector captures the policy in a CUDA graph,
-    compiled first under ``train.compile`` (TorchRL's ``cudagraph_policy`` / ``compile_policy``).
+    (``train.cudagraphs``) the collector captures the policy in a CUDA graph, compiled first
+    under ``train.compile`` (TorchRL's ``cudagraph_policy`` / ``compile_policy``).
     """
-    graphs = settings is not None and settings.cudagraphs
     return Collector(
         env,
         actor,
-        frames_per_batch=plan.frames_per_batch,
+        frames_per_batch=train.frames_per_batch,
         total_frames=total_frames,
         device=device,
         storing_device=device,
         auto_register_policy_transforms=False,
         trust_policy=True,
-        compile_policy={"mode": "default"} if graphs and settings.compile else None,
-        cudagraph_policy=graphs,
+        compile_policy={"mode": "default"} if train.cudagraphs and train.compile else None,
+        cudagraph_policy=train.cudagraphs,
     )
 
 
-def make_loss(cfg: TrainConfig, actor, critic) -> tuple[ClipPPOLoss, GAE]:
+def make_loss(loss: LossSettings, actor, critic, gae_chunk: int | None
+              ) -> tuple[ClipPPOLoss, GAE]:
     r"""``ClipPPOLoss`` (paper ``J(w)``, clip ``epsilon``, entropy bonus) and ``GAE``
     (``A_i = sum_k (gamma lambda)^k delta_{i+k}``, ``delta_i = r_i + gamma V(s_{i+1}) -
-    V(s_i)``, bootstrapped at truncation since ``terminated`` is never set)."""
-    c = cfg.loss
+    V(s_i)``, bootstrapped at truncation since ``terminated`` is never set), its critic
+    evaluated in chunks of ``gae_chunk`` samples (``train.gae_chunk``)."""
     gae = GAE(
-        gamma=float(c.gamma),
-        lmbda=float(c.gae_lambda),
+        gamma=loss.gamma,
+        lmbda=loss.gae_lambda,
         value_network=critic,
         average_gae=False,
-        value_chunk_size=cfg.train.gae_chunk,  # the same values, cache-sized critic calls
+        value_chunk_size=gae_chunk,  # the same values, cache-sized critic calls
     )
-    loss = ClipPPOLoss(
+    ppo = ClipPPOLoss(
         actor,
         critic,
-        clip_epsilon=float(c.clip_epsilon),
-        entropy_bonus=float(c.entropy_coeff) > 0,  # no Monte-Carlo entropy sample when unused
-        entropy_coeff=float(c.entropy_coeff),
-        critic_coeff=float(c.critic_coeff),
-        loss_critic_type=str(c.loss_critic_type),
-        normalize_advantage=bool(c.normalize_advantage),
+        clip_epsilon=loss.clip_epsilon,
+        entropy_bonus=loss.entropy_coeff > 0,  # no Monte-Carlo entropy sample when unused
+        entropy_coeff=loss.entropy_coeff,
+        critic_coeff=loss.critic_coeff,
+        loss_critic_type=loss.loss_critic_type,
+        normalize_advantage=loss.normalize_advantage,
     )
-    return loss, gae
+    return ppo, gae
 
 
-def make_optimizers(cfg: TrainConfig, actor, critic) -> tuple[torch.optim.Adam, torch.optim.Adam]:
+def make_optimizers(optim: OptimSettings, actor, critic, device, cudagraphs: bool
+                    ) -> tuple[torch.optim.Adam, torch.optim.Adam]:
     """Separate Adam optimisers (paper: ``4e-4`` actor, ``8e-5`` critic). Under
-    ``train.cudagraphs`` the learning rates are device tensors and the steps capturable (as
-    TorchRL's ``sota-implementations/ppo``), so a captured step reads the scheduled rate."""
-    eps = float(cfg.optim.eps)
-    lrs = float(cfg.optim.lr_actor), float(cfg.optim.lr_critic)
-    if not cfg.train.cudagraphs:
+    ``train.cudagraphs`` the learning rates are tensors on ``device`` and the steps capturable
+    (as TorchRL's ``sota-implementations/ppo``), so a captured step reads the scheduled rate."""
+    eps, lrs = optim.eps, (optim.lr_actor, optim.lr_critic)
+    if not cudagraphs:
         return (torch.optim.Adam(actor.parameters(), lr=lrs[0], eps=eps),
                 torch.optim.Adam(critic.parameters(), lr=lrs[1], eps=eps))
-    device = cfg.runtime.device
     return tuple(
         torch.optim.Adam(net.parameters(), lr=torch.tensor(lr, device=device), eps=eps,
                          capturable=True)
@@ -153,11 +157,11 @@ def make_optimizers(cfg: TrainConfig, actor, critic) -> tuple[torch.optim.Adam, 
     )
 
 
-def make_schedulers(cfg: TrainConfig, optimizers, n_updates: int) -> list[LambdaLR]:
+def make_schedulers(optim: OptimSettings, optimizers, n_updates: int) -> list[LambdaLR]:
     """Learning rate ``lr_0 (1 - u / n_updates)`` at update ``u`` (``optim.anneal=linear``,
     reaching ``lr_0 / n_updates`` at the last update) or constant (``none``); stepped once
     per update."""
-    if cfg.optim.anneal == "linear":
+    if optim.anneal == "linear":
 
         def factor(u: int) -> float:
             return max(0.0, 1.0 - u / n_updates)
@@ -169,6 +173,6 @@ def make_schedulers(cfg: TrainConfig, optimizers, n_updates: int) -> list[Lambda
     return [LambdaLR(opt, factor) for opt in optimizers]
 
 
-def make_logger(run_dir) -> TensorboardLogger:
+def make_logger(run: RunLayout) -> TensorboardLogger:
     """TensorBoard logger writing under ``<run dir>/tb/ppo``."""
-    return TensorboardLogger(exp_name="ppo", log_dir=str(run_dir / "tb"))
+    return TensorboardLogger(exp_name="ppo", log_dir=str(run.tb))

@@ -1,6 +1,6 @@
 r"""Atomic checkpoints of a training run (the exported policy: :mod:`swimrl.policies.files`).
 
-Layout of a run directory::
+The files of a run directory (:class:`~swimrl.policies.files.RunLayout`)::
 
     <run>/checkpoints/last.pt   full training state (this module), replaced atomically
     <run>/checkpoints/prev.pt   the checkpoint before it (resumed from if last.pt is corrupt)
@@ -31,7 +31,7 @@ import torch
 
 from swimrl.atomic import atomic_write, temp_path
 from swimrl.errors import BadFileError
-from swimrl.policies.files import CHECKPOINT_FORMAT, checkpoint_path, load_file
+from swimrl.policies.files import CHECKPOINT_FORMAT, RunLayout, load_file
 from swimrl.policies.networks import NO_STD_BOUND
 
 log = logging.getLogger(__name__)
@@ -110,7 +110,7 @@ def restore_rng(state: dict, env_generator: torch.Generator) -> None:
 
 
 def save_checkpoint(
-    path: Path,
+    run: RunLayout,
     *,
     actor,
     critic,
@@ -121,10 +121,11 @@ def save_checkpoint(
     config: dict,
     meta: dict,
 ) -> Path:
-    """Write the full training state atomically; the previous ``path`` becomes ``prev.pt``."""
-    path = Path(path)
+    """Write the full training state atomically to ``run.checkpoint``; the previous one
+    becomes ``run.prev_checkpoint``."""
+    path = run.checkpoint
     if path.exists():
-        prev = previous_path(path)
+        prev = run.prev_checkpoint
         tmp = temp_path(prev)
         tmp.unlink(missing_ok=True)
         os.link(path, tmp)
@@ -143,19 +144,15 @@ def save_checkpoint(
     return atomic_write(path, lambda fh: torch.save(data, fh), make_dirs=True)
 
 
-def previous_path(last: Path) -> Path:
-    """``prev.pt`` next to ``last.pt``: the checkpoint written before it."""
-    return Path(last).with_name("prev.pt")
-
-
 def load_checkpoint(run_dir: Path, map_location="cpu") -> tuple[Path, dict]:
     """``(path, state)`` of the newest readable checkpoint of ``run_dir``: ``last.pt``, or
     ``prev.pt`` (with a warning naming the bad ``last.pt``) if ``last.pt`` is corrupt."""
-    last = checkpoint_path(run_dir)
+    run = RunLayout(run_dir)
+    last = run.checkpoint
     try:
         return last, load_file(last, map_location)
     except BadFileError as err:
-        prev = previous_path(last)
+        prev = run.prev_checkpoint
         if not prev.exists():
             raise BadFileError(f"{err}; no prev.pt to fall back to: delete {last} to start "
                                "again, or pass overwrite=true") from err

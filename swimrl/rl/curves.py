@@ -22,6 +22,7 @@ import numpy as np
 
 from swimrl.atomic import atomic_write_text
 from swimrl.evaluation.records import read_curves
+from swimrl.policies.files import RunLayout
 
 #: Tags exported by default (see the monitoring table of docs/training.md).
 CURVE_TAGS = (
@@ -47,7 +48,7 @@ def read_scalars(run_dir: Path, tags=CURVE_TAGS) -> dict[int, dict[str, float]]:
     from tensorboard.backend.event_processing.event_accumulator import EventAccumulator
 
     events = []
-    for path in sorted(Path(run_dir, "tb").rglob("events.out.tfevents.*")):
+    for path in sorted(RunLayout(run_dir).tb.rglob("events.out.tfevents.*")):
         acc = EventAccumulator(str(path), size_guidance={"scalars": 0})
         acc.Reload()
         for tag in set(acc.Tags()["scalars"]) & set(tags):
@@ -72,7 +73,7 @@ def write_curves(run_dir: Path, out: Path | None = None, tags=CURVE_TAGS,
     """Write ``curves.csv`` (``frames`` then one column per tag; empty where not logged):
     the event files' rows over ``base`` (rows logged before a resume whose event files are
     gone; a step in both keeps the event files' row)."""
-    out = Path(out) if out is not None else Path(run_dir) / "curves.csv"
+    out = Path(out) if out is not None else RunLayout(run_dir).curves
     rows = {**(base or {}), **read_scalars(Path(run_dir), tags)}
     buf = io.StringIO(newline="")
     w = csv.writer(buf)

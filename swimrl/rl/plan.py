@@ -28,7 +28,7 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from swimrl.env import EnvParams
-from swimrl.errors import as_bool, as_float, as_int, one_of, require
+from swimrl.errors import as_bool, as_float, as_int, keep_number_types, one_of, require
 from swimrl.evaluation.rollout import SWIMMER_BYTES, EvalSetup
 from swimrl.flows.build import FLOW_WORK_BYTES, FlowSpec, flow_table_bytes
 from swimrl.policies.networks import ModelSpec
@@ -48,14 +48,15 @@ def training_seed(seed: int) -> int:
 
 @dataclass(frozen=True)
 class TrainSettings:
-    """``train.*``: batch and budget sizes, evaluation and checkpoint cadence."""
+    """``train.*``: batch and budget sizes, evaluation and checkpoint cadence (the values and
+    their meaning: ``conf/train.yaml``)."""
 
     n_flows: int
     n_swimmers: int
     frames_per_batch: int
     total_frames: int
     minibatch_size: int
-    minibatches_per_epoch: int | None
+    minibatches_per_epoch: int | None  # None: one pass over the batch
     epochs: int
     reward_scale: float | None  # None: automatic (1 - gamma) / (v_s T_u), set with the env
     eval_every: int
@@ -63,12 +64,12 @@ class TrainSettings:
     eval_swimmers: int
     checkpoint_every: int
     checkpoint_seconds: float
+    stop_after_updates: int | None
+    progress: bool
+    compile: bool  # torch.compile of loss + backward (rl.trainer)
     cudagraphs: bool  # CUDA graphs of the gradient step, GAE and policy (CUDA only)
     gae_chunk: int | None  # critic evaluations of the GAE in chunks of this many samples
-    stop_after_updates: int | None = None
-    progress: bool = True
-    compare_baselines: bool = False
-    compile: bool = False  # torch.compile of loss + backward (rl.trainer)
+    compare_baselines: bool
 
     def __post_init__(self) -> None:
         def k(key: str) -> str:
@@ -107,6 +108,7 @@ class TrainSettings:
         if self.gae_chunk is not None:
             as_int(k("gae_chunk"), self.gae_chunk)
         as_bool(k("compare_baselines"), self.compare_baselines)
+        keep_number_types(self)
 
 
 @dataclass(frozen=True)
@@ -129,6 +131,7 @@ class LossSettings:
         as_float("loss.critic_coeff", self.critic_coeff, lambda v: v > 0, "> 0")
         one_of("loss.loss_critic_type", self.loss_critic_type, LOSS_CRITIC_TYPES)
         as_bool("loss.normalize_advantage", self.normalize_advantage)
+        keep_number_types(self)
 
 
 @dataclass(frozen=True)
@@ -148,6 +151,7 @@ class OptimSettings:
         as_float("optim.eps", self.eps, lambda v: v > 0, "> 0")
         if self.max_grad_norm is not None:
             as_float("optim.max_grad_norm", self.max_grad_norm, lambda v: v > 0, "null or > 0")
+        keep_number_types(self)
 
 
 @dataclass(frozen=True)
@@ -160,9 +164,9 @@ class TrainConfig:
     loss: LossSettings
     optim: OptimSettings
     model: ModelSpec
-    resume: bool = False
-    overwrite: bool = False
-    eval_flow: FlowSpec | None = None  # None: the training flow
+    resume: bool
+    overwrite: bool
+    eval_flow: FlowSpec | None  # None: the training flow
 
     @property
     def held_out(self) -> EvalSetup:
@@ -179,6 +183,11 @@ class TrainConfig:
         require(not self.train.cudagraphs or device.type == "cuda",
                 "train.cudagraphs", self.train.cudagraphs,
                 f"false on device={device} (CUDA graphs need device=cuda)")
+        lam_max = self.evaluation.params.shape_factor_max
+        require(not self.train.compare_baselines or lam_max >= 0.98,
+                "train.compare_baselines", self.train.compare_baselines,
+                f"false with swimmer.shape_factor_max={lam_max} (its naive baseline is "
+                "Lambda = 0.98)")
 
     @property
     def seed(self) -> int:
@@ -201,55 +210,43 @@ class TrainConfig:
 
 @dataclass(frozen=True)
 class TrainPlan:
-    """Everything the training loop needs to know about sizes, schedule and seeds."""
+    """What the training loop derives from :class:`TrainSettings` (read the settings
+    themselves, ``cfg.train.n_flows``, ..., from there): rollout length, updates, the
+    minibatches of an epoch, the episode size and the seeds."""
 
-    params: EnvParams
-    n_flows: int
-    n_swimmers: int
-    frames_per_batch: int
     rollout_steps: int
+    """``L = frames_per_batch / (n_flows n_swimmers)``: decisions of every swimmer per batch."""
     n_updates: int
+    """``total_frames // frames_per_batch``."""
     total_frames: int
-    minibatch_size: int
+    """Frames the run trains on: ``n_updates x frames_per_batch`` (``train.total_frames``
+    rounded down to whole batches)."""
     minibatches_per_epoch: int
-    epochs: int
-    reward_scale: float | None  # None: automatic (1 - gamma) / (v_s T_u), set with the env
-    eval_every: int
+    """``train.minibatches_per_epoch``, or one pass (``frames_per_batch // minibatch_size``)."""
+    gradient_steps_per_update: int
+    """``epochs x minibatches_per_epoch``."""
+    frames_per_episode: int
+    """Frames of one paper episode: ``n_swimmers x N``."""
     eval_seed: int
     train_seed: int
-
-    @property
-    def frames_per_episode(self) -> int:
-        """Frames of one paper episode: ``n_swimmers x N``."""
-        return self.n_swimmers * self.params.n_decisions
-
-    @property
-    def gradient_steps_per_update(self) -> int:
-        return self.epochs * self.minibatches_per_epoch
 
 
 def make_plan(cfg: TrainConfig) -> TrainPlan:
     """Derived sizes: ``L = frames_per_batch / (F S)``, ``n_updates = total // frames_per_batch``,
     minibatches per epoch (default: a full pass), and the training and evaluation seeds."""
     t = cfg.train
-    fpb, batch = int(t.frames_per_batch), int(t.n_flows) * int(t.n_swimmers)
-    total, mb = int(t.total_frames), int(t.minibatch_size)
-    n_mb = fpb // mb if t.minibatches_per_epoch is None else int(t.minibatches_per_epoch)
+    fpb = t.frames_per_batch
+    n_updates = t.total_frames // fpb
+    n_mb = fpb // t.minibatch_size if t.minibatches_per_epoch is None else t.minibatches_per_epoch
     return TrainPlan(
-        params=cfg.params,
-        n_flows=int(t.n_flows),
-        n_swimmers=int(t.n_swimmers),
-        frames_per_batch=fpb,
-        rollout_steps=fpb // batch,
-        n_updates=total // fpb,
-        total_frames=(total // fpb) * fpb,
-        minibatch_size=mb,
+        rollout_steps=fpb // (t.n_flows * t.n_swimmers),
+        n_updates=n_updates,
+        total_frames=n_updates * fpb,
         minibatches_per_epoch=n_mb,
-        epochs=int(t.epochs),
-        reward_scale=None if t.reward_scale is None else float(t.reward_scale),
-        eval_every=int(t.eval_every),
-        eval_seed=int(cfg.seed) + EVAL_SEED_OFFSET,
-        train_seed=training_seed(int(cfg.seed)),
+        gradient_steps_per_update=t.epochs * n_mb,
+        frames_per_episode=t.n_swimmers * cfg.params.n_decisions,
+        eval_seed=cfg.seed + EVAL_SEED_OFFSET,
+        train_seed=training_seed(cfg.seed),
     )
 
 
@@ -258,22 +255,23 @@ def make_plan(cfg: TrainConfig) -> TrainPlan:
 FRAME_BYTES = 1024
 
 
-def check_train_memory(cfg: TrainConfig, plan: TrainPlan) -> None:
+def check_train_memory(cfg: TrainConfig) -> None:
     """Refuse (one line naming the key of the largest part) a run whose training flows and
     swimmers, rollout batch (:data:`FRAME_BYTES` per frame) and held-out evaluation chunk
     exceed the device's available memory (:func:`~swimrl.runtime.check_memory`)."""
     dtype, interval = cfg.runtime.dtype, cfg.params.update_interval
     held = cfg.held_out
     eval_flows = min(held.sizes.flows_per_batch, held.sizes.n_flows)
+    t = cfg.train
     parts = {
-        "train.n_flows": flow_table_bytes(cfg.evaluation.flow, plan.n_flows, dtype, interval)
-        + plan.n_flows * plan.n_swimmers * SWIMMER_BYTES,
-        "train.frames_per_batch": plan.frames_per_batch * FRAME_BYTES,
+        "train.n_flows": flow_table_bytes(cfg.evaluation.flow, t.n_flows, dtype, interval)
+        + t.n_flows * t.n_swimmers * SWIMMER_BYTES,
+        "train.frames_per_batch": t.frames_per_batch * FRAME_BYTES,
         "eval.flows_per_batch": flow_table_bytes(held.flow, eval_flows, dtype, interval)
         + eval_flows * held.sizes.n_swimmers * SWIMMER_BYTES,
     }
     key = max(parts, key=parts.get)
-    value = {"train.n_flows": plan.n_flows, "train.frames_per_batch": plan.frames_per_batch,
+    value = {"train.n_flows": t.n_flows, "train.frames_per_batch": t.frames_per_batch,
              "eval.flows_per_batch": held.sizes.flows_per_batch}[key]
     what = ", ".join(f"{k.split('.')[-1]} {v / 2**30:.1f} GiB" for k, v in parts.items())
     check_memory(sum(parts.values()) + FLOW_WORK_BYTES, cfg.runtime.device, key, value,

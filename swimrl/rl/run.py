@@ -30,7 +30,7 @@ from swimrl.errors import ConfigError
 from swimrl.evaluation.compare import CompareConfig, compare, strategy_variants
 from swimrl.evaluation.jobs import preemption_signals, refuse_if_locked, run_lock
 from swimrl.evaluation.records import flatten, summary_line, write_comparison, write_json
-from swimrl.policies.files import checkpoint_path
+from swimrl.policies.files import RunLayout
 from swimrl.rl.checkpoint import load_checkpoint, upgrade_config
 from swimrl.rl.plan import TrainConfig, TrainPlan, check_train_memory, make_plan
 from swimrl.rl.trainer import PPOTrainer
@@ -73,19 +73,21 @@ def config_differences(old: dict, new: dict) -> list[str]:
 
 
 def clean_run_dir(out: Path) -> None:
-    """Delete the outputs of a previous run in ``out`` (``overwrite=true``)."""
-    for name in ("checkpoints", "tb", "policies"):
-        if (out / name).is_dir():
-            shutil.rmtree(out / name)
-    for name in ("policy.pt", "metrics.json", "curves.csv", "comparison.json", "comparison.md"):
-        (out / name).unlink(missing_ok=True)
+    """Delete the outputs of a previous run in ``out`` (``overwrite=true``):
+    :attr:`~swimrl.policies.files.RunLayout.training_outputs`."""
+    for path in RunLayout(out).training_outputs:
+        if path.is_dir():
+            shutil.rmtree(path)
+        else:
+            path.unlink(missing_ok=True)
 
 
 def run_dir_state(cfg: TrainConfig, out: Path) -> str:
     """What a run in ``out`` does under the run-directory rules, without touching ``out``:
     ``"fresh"``, ``"resume"``, ``"finished"`` (``resume=true`` on a finished run: nothing to
     do) or ``"overwrite"``; raises ``FileExistsError`` for a refused rerun."""
-    metrics, ckpt = out / "metrics.json", checkpoint_path(out)
+    run = RunLayout(out)
+    metrics, ckpt = run.metrics, run.checkpoint
     if cfg.overwrite:
         return "overwrite"
     if metrics.exists():
@@ -104,12 +106,12 @@ def run_dir_state(cfg: TrainConfig, out: Path) -> str:
 
 
 def check_run(cfg: TrainConfig, out: Path | None) -> str | None:
-    """Everything checked before any compute: the derived sizes (:func:`make_plan`) and, for a
-    known run directory ``out``, that no other process holds it
-    (:func:`~swimrl.evaluation.jobs.refuse_if_locked`) and the run-directory rules
-    (:func:`run_dir_state`), and that the run fits the machine's memory
-    (:func:`~swimrl.rl.plan.check_train_memory`)."""
-    check_train_memory(cfg, make_plan(cfg))
+    """Everything checked before any compute (the config's values were checked when ``cfg``
+    was made): that the run fits the machine's memory
+    (:func:`~swimrl.rl.plan.check_train_memory`) and, for a known run directory ``out``, that
+    no other process holds it (:func:`~swimrl.evaluation.jobs.refuse_if_locked`) and the
+    run-directory rules (:func:`run_dir_state`)."""
+    check_train_memory(cfg)
     if out is None:
         return None
     refuse_if_locked(Path(out))
@@ -133,7 +135,7 @@ def train(cfg: TrainConfig, out: Path) -> dict | None:
 
 
 def _train_locked(cfg: TrainConfig, plan: TrainPlan, out: Path) -> dict | None:
-    device, dtype = cfg.runtime.device, cfg.runtime.dtype
+    run = RunLayout(out)
     state = run_dir_state(cfg, out)
     if state == "finished":
         print(f"{out}: already finished (metrics.json exists); nothing to do", flush=True)
@@ -149,7 +151,7 @@ def _train_locked(cfg: TrainConfig, plan: TrainPlan, out: Path) -> dict | None:
                 f"resume=true with a config that differs from {ckpt}: " + "; ".join(diffs)
             )
     out.mkdir(parents=True, exist_ok=True)
-    trainer = PPOTrainer(cfg, plan, out, device, dtype)
+    trainer = PPOTrainer(cfg, plan, out)
     if resuming:
         trainer.restore(ckpt)
         log.info(
@@ -159,29 +161,29 @@ def _train_locked(cfg: TrainConfig, plan: TrainPlan, out: Path) -> dict | None:
             plan.n_updates,
             trainer.counters["frames"],
         )
+    t = cfg.train
     log.info(
         "PPO: %d updates x %d frames (%d flows x %d swimmers x %d decisions), %d epochs x %d "
         "minibatches of %d; reward scale %.4g; %.1f episodes of %d swimmers",
         plan.n_updates,
-        plan.frames_per_batch,
-        plan.n_flows,
-        plan.n_swimmers,
+        t.frames_per_batch,
+        t.n_flows,
+        t.n_swimmers,
         plan.rollout_steps,
-        plan.epochs,
+        t.epochs,
         plan.minibatches_per_epoch,
-        plan.minibatch_size,
+        t.minibatch_size,
         trainer.reward_scale,
         plan.total_frames / plan.frames_per_episode,
-        plan.n_swimmers,
+        t.n_swimmers,
     )
     try:
         with preemption_signals() as preemption:
-            stop = cfg.train.stop_after_updates
-            finished = trainer.train(None if stop is None else int(stop), preemption)
+            finished = trainer.train(cfg.train.stop_after_updates, preemption)
             u, frames = trainer.counters["updates"], trainer.counters["frames"]
             if preemption.requested:
                 preemption.stop(f"after update {u}/{plan.n_updates} ({frames} frames): "
-                                f"checkpoint written to {checkpoint_path(out)}; continue with "
+                                f"checkpoint written to {run.checkpoint}; continue with "
                                 "resume=true")
             if not finished:
                 log.info("stopped after update %d/%d; continue with resume=true", u,
@@ -203,7 +205,7 @@ def _train_locked(cfg: TrainConfig, plan: TrainPlan, out: Path) -> dict | None:
         "eval_seed": plan.eval_seed,
         "train_seed": plan.train_seed,
     }
-    write_json(metrics, out / "metrics.json", overwrite=bool(cfg.overwrite))
+    write_json(metrics, run.metrics, overwrite=cfg.overwrite)
     print(summary_line(metrics), flush=True)
     if cfg.train.compare_baselines:
         compare_with_baselines(cfg, out, plan.eval_seed)

@@ -41,7 +41,7 @@ from tqdm.auto import tqdm
 from swimrl.errors import NonFiniteError
 from swimrl.evaluation.jobs import Preemption
 from swimrl.evaluation.rollout import EvalSetup, evaluate
-from swimrl.policies.files import checkpoint_path, load_file, policy_meta, policy_path, save_policy
+from swimrl.policies.files import RunLayout, load_file, policy_meta, save_policy
 from swimrl.policies.networks import deterministic_actor, policy_std
 from swimrl.rl import builders as rlb
 from swimrl.rl.checkpoint import capture_rng, restore_rng, save_checkpoint
@@ -66,22 +66,23 @@ LOSS_LOG_KEYS = (
 class PPOTrainer:
     """Owns env, networks, loss, optimisers and counters of one training run."""
 
-    def __init__(self, cfg: TrainConfig, plan: TrainPlan, run_dir: Path, device, dtype):
-        self.cfg, self.plan, self.run_dir = cfg, plan, Path(run_dir)
-        self.device, self.dtype = device, dtype
-        params = plan.params
-        torch.manual_seed(int(cfg.seed))  # network init, action sampling, minibatch order
-        self.env = rlb.make_env(cfg, plan)
+    def __init__(self, cfg: TrainConfig, plan: TrainPlan, run_dir: Path):
+        self.cfg, self.plan, self.run = cfg, plan, RunLayout(run_dir)
+        rt, t = cfg.runtime, cfg.train
+        self.device, self.dtype = rt.device, rt.dtype
+        torch.manual_seed(cfg.seed)  # network init, action sampling, minibatch order
+        self.env = rlb.make_env(cfg.evaluation.flow, cfg.params, rt, t, cfg.loss, plan.train_seed)
         self.swimmer_env = rlb.base_env(self.env)
         self.reward_scale = rlb.reward_scale_of(self.env)
-        self.actor = rlb.make_actor(cfg, self.env, device, dtype)
-        self.critic = rlb.make_critic(cfg, self.env, device, dtype)
+        self.actor = rlb.make_actor(cfg.model, self.env, rt)
+        self.critic = rlb.make_critic(cfg.model, self.env, rt)
         self.policy = deterministic_actor(self.actor)
-        self.loss, self.gae = rlb.make_loss(cfg, self.actor, self.critic)
-        self.optimizers = rlb.make_optimizers(cfg, self.actor, self.critic)
-        self.schedulers = rlb.make_schedulers(cfg, self.optimizers, plan.n_updates)
+        self.loss, self.gae = rlb.make_loss(cfg.loss, self.actor, self.critic, t.gae_chunk)
+        self.optimizers = rlb.make_optimizers(cfg.optim, self.actor, self.critic, rt.device,
+                                              t.cudagraphs)
+        self.schedulers = rlb.make_schedulers(cfg.optim, self.optimizers, plan.n_updates)
         self.counters = {"frames": 0, "updates": 0, "wall_s": 0.0}
-        self.meta = policy_meta(params, cfg.model, str(dtype).replace("torch.", ""))
+        self.meta = policy_meta(cfg.params, cfg.model, str(rt.dtype).replace("torch.", ""))
         self.config = cfg.record
         self._loss_fn = None  # built on the first update (see _compiled_loss_backward)
         self._step_fn = None  # the gradient step, built on the first update (_step_function)
@@ -103,7 +104,7 @@ class PPOTrainer:
 
     def save_checkpoint(self) -> Path:
         path = save_checkpoint(
-            checkpoint_path(self.run_dir),
+            self.run,
             actor=self.actor,
             critic=self.critic,
             optimizers=self.optimizers,
@@ -115,7 +116,7 @@ class PPOTrainer:
         )
         if self.logger is not None:
             self.logger.experiment.flush()
-            write_curves(self.run_dir, base=self.curve_base)
+            write_curves(self.run.root, base=self.curve_base)
         return path
 
     def restore(self, path: Path) -> dict:
@@ -132,7 +133,7 @@ class PPOTrainer:
         self.counters = dict(ck["counters"])
         # the curve up to the checkpoint, kept where the event files may be gone (a run
         # resumed from its committed record: checkpoint + curves.csv)
-        curves = self.run_dir / "curves.csv"
+        curves = self.run.curves
         if curves.is_file():
             self.curve_base = {step: row for step, row in read_curves_csv(curves).items()
                                if step <= self.counters["frames"]}
@@ -142,7 +143,7 @@ class PPOTrainer:
         """After loading optimiser states written by another path: learning rates as device
         tensors and capturable steps under ``train.cudagraphs``, plain floats otherwise (a
         checkpoint moves between the CPU and a CUDA-graphed run)."""
-        graphs = bool(self.cfg.train.cudagraphs)
+        graphs = self.cfg.train.cudagraphs
         for opt in self.optimizers:
             for group in opt.param_groups:
                 for key in ("lr", "initial_lr"):
@@ -160,7 +161,7 @@ class PPOTrainer:
     def save_policy(self, path: Path | None = None) -> Path:
         """The deterministic policy as ``<run>/policy.pt`` (or ``path``)."""
         return save_policy(
-            policy_path(self.run_dir) if path is None else path,
+            self.run.policy if path is None else path,
             actor=self.actor,
             counters=self.counters,
             config=self.config,
@@ -180,7 +181,7 @@ class PPOTrainer:
         t0 = time.perf_counter()
         # the policy evaluated, kept so that a policy can be chosen afterwards on flows of a
         # separate validation seed (the periodic evaluation's flows are the final one's)
-        self.save_policy(self.run_dir / "policies" / f"policy_{self.counters['frames']}.pt")
+        self.save_policy(self.run.periodic_policy(self.counters["frames"]))
         m = self.evaluate()
         self.last_eval = m
         step = self.counters["frames"]
@@ -236,7 +237,7 @@ class PPOTrainer:
             with record_function("ppo/clip_optimizer"):
                 if clip is not None:
                     for g in groups:
-                        torch.nn.utils.clip_grad_norm_(g, float(clip))
+                        torch.nn.utils.clip_grad_norm_(g, clip)
                 for opt in self.optimizers:
                     opt.step()
                     opt.zero_grad(set_to_none=True)
@@ -278,15 +279,15 @@ class PPOTrainer:
         Each epoch gathers the samples of its minibatches once, in a fresh random order, and
         takes the minibatches as consecutive slices; the loss terms are stacked and averaged
         once per update."""
-        plan = self.plan
+        plan, mb = self.plan, self.cfg.train.minibatch_size
         step = self._step_function()
         with torch.no_grad(), record_function("ppo/gae"):
             data = self._gae_fn(data)
         flat = data.select(*self._loss_keys(data), strict=False).reshape(-1)
-        n, mb = flat.numel(), plan.minibatch_size
+        n = flat.numel()
         terms: list[TensorDict] = []
         log_keys: list[str] | None = None
-        for _ in range(plan.epochs):
+        for _ in range(self.cfg.train.epochs):
             with record_function("ppo/minibatch"):
                 used = torch.randperm(n, device=flat.device)[: plan.minibatches_per_epoch * mb]
                 shuffled = flat[used]
@@ -312,19 +313,17 @@ class PPOTrainer:
         made in this call, or ``preemption`` was requested (a signal, checked after each
         update: the update in flight and its periodic evaluation are finished); then the
         state is checkpointed and :attr:`finished_training` returned."""
-        cfg, plan = self.cfg, self.plan
+        cfg, plan, fpb = self.cfg, self.plan, self.cfg.train.frames_per_batch
         if self.logger is None:
-            self.logger = rlb.make_logger(self.run_dir)
+            self.logger = rlb.make_logger(self.run)
         remaining = plan.n_updates - self.counters["updates"]
         if remaining <= 0:
             return True
-        n_run = remaining if stop_after is None else min(remaining, int(stop_after))
+        n_run = remaining if stop_after is None else min(remaining, stop_after)
         stop_at = self.counters["updates"] + n_run
-        if self.counters["updates"] == 0 and plan.eval_every:
+        if self.counters["updates"] == 0 and cfg.train.eval_every:
             self._periodic_eval()
-        collector = rlb.make_collector(
-            self.env, self.actor, plan, n_run * plan.frames_per_batch, self.device, cfg.train
-        )
+        collector = rlb.make_collector(self.env, self.actor, cfg.train, n_run * fpb, self.device)
         bar = tqdm(
             total=plan.total_frames,
             initial=self.counters["frames"],
@@ -350,7 +349,7 @@ class PPOTrainer:
                 self._stop_if_nonfinite(stats)
                 collector.update_policy_weights_()
                 t_done = time.perf_counter()
-                self.counters["frames"] += plan.frames_per_batch
+                self.counters["frames"] += fpb
                 self.counters["updates"] += 1
                 self.counters["wall_s"] += t_done - t_prev
                 u, step = self.counters["updates"], self.counters["frames"]
@@ -364,8 +363,8 @@ class PPOTrainer:
                         "policy/abs_action_mean": float(action_abs),
                         "time/collect_s": t_collected - t_prev,
                         "time/update_s": t_done - t_collected,
-                        "time/env_frames_per_s": plan.frames_per_batch / (t_collected - t_prev),
-                        "time/frames_per_s": plan.frames_per_batch / (t_done - t_prev),
+                        "time/env_frames_per_s": fpb / (t_collected - t_prev),
+                        "time/frames_per_s": fpb / (t_done - t_prev),
                     }
                 )
                 if r_hat_train is not None:
@@ -373,8 +372,9 @@ class PPOTrainer:
                 for k, v in logs.items():
                     if math.isfinite(v):
                         self.logger.log_scalar(k, v, step)
-                bar.update(plan.frames_per_batch)
-                if plan.eval_every and (u % plan.eval_every == 0 or u == plan.n_updates):
+                bar.update(fpb)
+                every = cfg.train.eval_every
+                if every and (u % every == 0 or u == plan.n_updates):
                     self._periodic_eval()
                 post = {"upd": u, "fps": f"{logs['time/frames_per_s']:.0f}"}
                 if self.last_train_r_hat is not None:
@@ -385,8 +385,8 @@ class PPOTrainer:
                 last = u >= stop_at or (preemption is not None and preemption.requested)
                 if (
                     last
-                    or u % int(cfg.train.checkpoint_every) == 0
-                    or time.perf_counter() - t_ckpt >= float(cfg.train.checkpoint_seconds)
+                    or u % cfg.train.checkpoint_every == 0
+                    or time.perf_counter() - t_ckpt >= cfg.train.checkpoint_seconds
                 ):
                     self.save_checkpoint()
                     t_ckpt = time.perf_counter()
@@ -406,7 +406,7 @@ class PPOTrainer:
             bad += [f"{net} parameter {name}" for name, p in module.named_parameters()
                     if not torch.isfinite(p).all()]
         if bad:
-            ck = checkpoint_path(self.run_dir)
+            ck = self.run.checkpoint
             kept = f"the last good checkpoint {ck} is kept" if ck.exists() else "no checkpoint"
             raise NonFiniteError(
                 f"training stopped at update {self.counters['updates'] + 1}: "

@@ -45,7 +45,7 @@ from swimrl.evaluation.statistics import paired_ratio
 from swimrl.flows.build import StoredRunSpec
 from swimrl.flows.dns.store import store_status
 from swimrl.policies.baselines import StrategyLabel
-from swimrl.policies.files import resolve_policy_file
+from swimrl.policies.files import RunLayout, resolve_policy_file
 
 from .records import FRAME_EVERY, DNSFiguresConfig, FiguresConfig, record_strategies
 from .style import COLORS, LABEL, save
@@ -141,7 +141,7 @@ def read_transfer(root: Path) -> dict[str, np.ndarray]:
     ``{label: (flows,)}``, plus ``realisation`` (the index of each flow's record)."""
     per: dict[str, list[np.ndarray]] = {}
     which: list[np.ndarray] = []
-    for i, path in enumerate(sorted(Path(root).rglob("comparison.json"))):
+    for i, path in enumerate(sorted(Path(root).rglob(RunLayout(root).comparison.name))):
         rec = json.loads(path.read_text())
         for row in rec["rows"]:
             per.setdefault(row["label"], []).append(np.asarray(row["per_flow"], dtype=float))

@@ -22,6 +22,7 @@ from pathlib import Path
 import numpy as np
 
 from swimrl.env import EnvParams, SwimmerEnv
+from swimrl.errors import as_bool, as_float, as_int, keep_number_types, one_of
 from swimrl.evaluation.records import read_npz, write_npz
 from swimrl.evaluation.rollout import EvalSetup, EvalSizes, chunk_seed, evaluate_shared
 from swimrl.evaluation.trajectories import TrajectoryRecorder
@@ -46,7 +47,8 @@ RECORD_STRATEGIES = ("smart", "naive", "STO")
 
 @dataclass(frozen=True)
 class DNSFiguresConfig:
-    """Where the DNS figure's records are (``dns.*`` of ``conf/figures.yaml``)."""
+    """Where the DNS figure's records are (``dns.*`` of ``conf/figures.yaml``, which holds the
+    values)."""
 
     store: Path
     """A held-out stored run to replay when ``record`` does not exist yet."""
@@ -56,22 +58,38 @@ class DNSFiguresConfig:
     """Directory searched for ``comparison.json`` (one per held-out realisation)."""
     checks: Path
     """``dns_checks.json`` of ``swimrl-dns-plots`` (pooled PDFs)."""
-    policy: str = "pretrained/ku10"
+    policy: str
     """The smart policy of (a) and the videos (the paper's video 5: trained at Ku = 10)."""
-    trained: str = "pretrained/dns"
+    trained: str
     """The policy trained in the DNS: the dotted line of (c) and the maps of (d), (e)."""
-    curve: Path | None = None
+    curve: Path | None
     """``curves.csv`` of its training run: (f), its evaluation R_hat against frames."""
-    n_swimmers: int = 300
-    n_traj: int = 4
-    decode_n: int | None = 384
-    glyph_window: float = 20.0
-    glyph_every: float = 2.0
+    n_swimmers: int
+    """Swimmers per strategy."""
+    n_traj: int
+    """Trajectories drawn."""
+    decode_n: int | None
+    """Decode grid of the replay (None: the run's own)."""
+    glyph_window: float
+    """``tau_K`` of trajectory in (a)."""
+    glyph_every: float
+    """``tau_K`` between glyphs."""
+
+    def __post_init__(self) -> None:
+        for name in ("policy", "trained"):
+            object.__setattr__(self, name, str(getattr(self, name)))
+        as_int("dns.n_swimmers", self.n_swimmers, low=1)
+        as_int("dns.n_traj", self.n_traj, low=1)
+        if self.decode_n is not None:
+            as_int("dns.decode_n", self.decode_n, low=8)
+        as_float("dns.glyph_window", self.glyph_window, lambda v: v > 0, "> 0")
+        as_float("dns.glyph_every", self.glyph_every, lambda v: v > 0, "> 0")
+        keep_number_types(self)
 
 
 @dataclass(frozen=True)
 class FiguresConfig:
-    """``swimrl-figures``: where, which, and how large (defaults in ``conf/figures.yaml``)."""
+    """``swimrl-figures``: where, which, and how large (the values: ``conf/figures.yaml``)."""
 
     out: Path
     """Directory of the PNGs (``docs/figures``)."""
@@ -82,32 +100,44 @@ class FiguresConfig:
     """Swimmer and episode of every evaluation (the robustness sweeps change one field)."""
     flow: StochasticSpec
     """Flow of every evaluation; ``kubo`` is set per figure."""
-    only: str | None = None
+    only: str | None
     """One figure (a name of :data:`FIGURES`), or None: all."""
-    n_flows: int = 1
+    n_flows: int
     """Flows of each Ku record (final positions, trajectories, policy maps)."""
-    n_swimmers: int = 1000
+    n_swimmers: int
     """Swimmers per flow and strategy of each Ku record."""
-    n_traj: int = 8
+    n_traj: int
     """Trajectories drawn per strategy."""
-    robust_flows: int = 2
+    robust_flows: int
     """Flows per point of the robustness sweeps."""
-    robust_swimmers: int = 100
+    robust_swimmers: int
     """Swimmers per flow and strategy per point of the robustness sweeps."""
-    seed: int = 0
-    policies: str = "pretrained"
+    seed: int
+    policies: str
     """Smart policy at Ku: ``<policies>/ku0.1`` ... ``<policies>/ku1e7`` (a policy spec)."""
-    results: Path = Path("docs/results/paper_protocol")
+    results: Path
     """``comparison.json`` records of smartPerformance(a)."""
-    curves: Path = Path("docs/results/paper_runs")
+    curves: Path
     """Searched for ``curves.csv`` (trainingCurves)."""
-    fits: Path = Path("docs/results/minimal_fits")
+    fits: Path
     """``ku*/fit.json`` of ``swimrl-fit-minimal`` at each Ku (ablation (b), (c))."""
-    ablation: Path = Path("docs/results/ablation")
+    ablation: Path
     """Run directories of the signal-ablation multirun (ablation (a))."""
-    dns: DNSFiguresConfig | None = None
+    dns: DNSFiguresConfig | None
     """Records of Fig. dnsFlow and videos 5, 10 (None: not drawn)."""
-    progress: bool = True
+    progress: bool
+
+    def __post_init__(self) -> None:
+        one_of("flow.name", self.flow.name, ("stochastic",))
+        if self.only is not None:
+            object.__setattr__(self, "only", str(self.only))
+            one_of("only", self.only, FIGURES)
+        for key in ("n_flows", "n_swimmers", "n_traj", "robust_flows", "robust_swimmers"):
+            as_int(f"figures.{key}", getattr(self, key))
+        as_int("seed", self.seed, low=0)
+        object.__setattr__(self, "policies", str(self.policies))
+        as_bool("progress", self.progress)
+        keep_number_types(self)
 
 
 # -- cache and evaluations -------------------------------------------------------------------

@@ -14,6 +14,7 @@ from swimrl.analysis.plots import pyplot
 from swimrl.analysis.training_curves import PAPER_EPISODE_FRAMES, draw_curve
 from swimrl.evaluation.records import read_curves
 from swimrl.flows.labels import ku_display, parse_ku_name
+from swimrl.policies.files import RunLayout
 
 from .records import FiguresConfig
 from .style import save, shown
@@ -22,8 +23,9 @@ from .style import save, shown
 def find_curves(root: Path) -> dict[str, Path]:
     """``curves.csv`` files under ``root``, labelled by their run directory; linked run
     directories are followed (``docs/results/paper_runs/ku*_seed*`` are links)."""
-    found = (Path(d) / "curves.csv" for d, _, files in os.walk(root, followlinks=True)
-             if "curves.csv" in files)
+    name = RunLayout(root).curves.name
+    found = (RunLayout(d).curves for d, _, files in os.walk(root, followlinks=True)
+             if name in files)
     return {p.parent.name: p for p in sorted(found)}
 
 

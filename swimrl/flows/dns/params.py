@@ -5,8 +5,8 @@
 with ``nu`` the viscosity, ``alpha`` the hypo-friction coefficient and ``h = hypo_power``
 (``h = 0`` is the paper's linear friction ``-alpha u``), ``f`` the white-in-time forcing that
 injects energy at the mean rate ``epsilon``, peaked at ``|k| = k_f`` with Gaussian width
-``forcing_width``. The defaults are the values of ``conf/solver/dns.yaml`` (a test keeps them
-equal); ``docs/dns.md`` derives them.
+``forcing_width``. The defaults are the values of ``conf/solver/dns.yaml`` (a test,
+``tests/test_config_sources.py``, keeps them equal); ``docs/dns.md`` derives them.
 """
 
 from __future__ import annotations

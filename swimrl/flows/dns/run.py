@@ -26,7 +26,7 @@ from typing import Any
 import zarr
 from tqdm import tqdm
 
-from swimrl.errors import as_float, as_int, one_of
+from swimrl.errors import as_bool, as_float, as_int, keep_number_types, one_of
 from swimrl.flows.base import CHANNELS
 from swimrl.flows.dns import diagnostics as diag
 from swimrl.flows.dns.params import DNSParams
@@ -40,7 +40,8 @@ INIT_KINDS = ("rest", "random")
 
 @dataclass(frozen=True)
 class DNSRun:
-    """Everything ``swimrl-dns`` needs (``conf/dns.yaml``; keys in the error messages)."""
+    """Everything ``swimrl-dns`` needs (``conf/dns.yaml``; keys in the error messages). The
+    defaults (for library calls) are ``conf/dns.yaml``'s (``tests/test_config_sources.py``)."""
 
     params: DNSParams
     seed: int
@@ -61,6 +62,8 @@ class DNSRun:
     progress: bool = True
 
     def __post_init__(self) -> None:
+        as_int("seed", self.seed, low=0)
+        object.__setattr__(self, "init_kind", str(self.init_kind))
         one_of("init.kind", self.init_kind, INIT_KINDS)
         as_float("init.energy", self.init_energy, lambda v: v > 0, "> 0")
         as_float("init.k_peak", self.init_k_peak, lambda v: v > 0, "> 0")
@@ -70,10 +73,14 @@ class DNSRun:
         as_int("store.n_times", self.n_times)
         as_float("store.interval_tau_k", self.interval_tau_k, lambda v: v > 0, "> 0")
         as_int("store.chunk_times", self.chunk_times)
+        as_bool("store.overwrite", self.overwrite)
+        as_bool("store.extend", self.extend)
         as_float("store.checkpoint_seconds", self.checkpoint_seconds, lambda v: v > 0, "> 0")
         as_int("store.diag_every", self.diag_every)
         if self.max_steps is not None:
             as_int("max_steps", self.max_steps)
+        as_bool("progress", self.progress)
+        keep_number_types(self)
 
     @property
     def spinup(self) -> SpinupSchedule:
