@@ -43,17 +43,15 @@ OUT.mkdir(parents=True, exist_ok=True)
 # directory (a finished run is otherwise never overwritten).
 
 # %%
-if SMALL:
-    sizes = ["flow.n_grid=64", "flow.spacing=0.1", "episode.duration=2.0", "kernel=eager",
-             "train.n_flows=2", "train.n_swimmers=4", "train.frames_per_batch=80",
-             "train.total_frames=320", "train.minibatch_size=40", "train.eval_every=2",
-             "train.eval_flows=1", "train.eval_swimmers=4", "eval.n_flows=2",
-             "eval.n_swimmers=4"]
-else:
-    sizes = ["episode.duration=20.0", "train.n_flows=16", "train.n_swimmers=8",
-             "train.frames_per_batch=6400", "train.total_frames=640000",
-             "train.minibatch_size=640", "train.eval_every=10", "train.eval_flows=2",
-             "train.eval_swimmers=32", "eval.n_flows=4", "eval.n_swimmers=50"]
+TINY = ["flow.n_grid=64", "flow.spacing=0.1", "episode.duration=2.0", "kernel=eager",
+        "train.n_flows=2", "train.n_swimmers=4", "train.frames_per_batch=80",
+        "train.total_frames=320", "train.minibatch_size=40", "train.eval_every=2",
+        "train.eval_flows=1", "train.eval_swimmers=4", "eval.n_flows=2", "eval.n_swimmers=4"]
+FULL = ["episode.duration=20.0", "train.n_flows=16", "train.n_swimmers=8",
+        "train.frames_per_batch=6400", "train.total_frames=640000", "train.minibatch_size=640",
+        "train.eval_every=10", "train.eval_flows=2", "train.eval_swimmers=32",
+        "eval.n_flows=4", "eval.n_swimmers=50"]
+sizes = TINY if SMALL else FULL
 overrides = ["flow.kubo=10", "seed=0", "threads=1", "train.compile=false",
              "train.progress=false", "train.compare_baselines=true", "overwrite=true", *sizes]
 with initialize_config_module("swimrl.conf", version_base="1.3"):
