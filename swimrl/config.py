@@ -48,6 +48,7 @@ from swimrl.policies.baselines import StrategySpec
 from swimrl.policies.networks import ModelSpec
 from swimrl.rl.plan import LossSettings, OptimSettings, TrainConfig, TrainSettings
 from swimrl.runtime import Runtime
+from swimrl.task import RewardSpec, TaskSpec
 
 #: ``${flow_tag:${flow}}`` -> ``ku10.0`` for the stochastic flow, else its name (run directories)
 OmegaConf.register_new_resolver(
@@ -122,9 +123,11 @@ def runtime(cfg: DictConfig) -> Runtime:
 
 
 def env_params(cfg: DictConfig) -> EnvParams:
-    """``swimmer.*``, ``episode.*`` and ``signals.names``."""
+    """``swimmer.*``, ``episode.*``, ``signals.names``, ``task.*`` and ``reward.*``."""
     return from_node(EnvParams, {"swimmer.": cfg.swimmer, "episode.": cfg.episode},
-                     signals=tuple(cfg.signals.names))
+                     signals=tuple(cfg.signals.names),
+                     task=from_node(TaskSpec, {"task.": cfg.task}),
+                     reward=from_node(RewardSpec, {"reward.": cfg.reward}))
 
 
 def flow_spec(flow: DictConfig, rt: Runtime) -> FlowSpec:

@@ -3,20 +3,26 @@ r"""TorchRL environment: batched swimmers in batched flows.
 Batch shape ``(n_flows, n_swimmers)``: swimmer ``(f, s)`` moves in flow realisation ``f``.
 One environment step is one decision interval ``T_u``: the action ``Lambda`` (shape factor,
 bounded to ``[-Lambda_max, Lambda_max]``) is held while the dynamics
-(:mod:`swimrl.physics.swimmer`) is integrated over ``T_u / dt`` Heun steps. Reward (``eq:reward``):
+(:mod:`swimrl.physics.swimmer`) is integrated over ``T_u / dt`` Heun steps. Reward
+(``eq:reward``, ``task=displacement``):
 
 ``r_i = |x(t_i) - x_0| - |x(t_{i-1}) - x_0|``,
 
-so the undiscounted return telescopes to ``|x(t_N) - x_0|`` (flow length units). Episodes
-are truncated after ``N = T / T_u`` decisions. Keys:
+so the undiscounted return telescopes to ``|x(t_N) - x_0|`` (flow length units); with
+``task=target`` it is the decrease of the distance to the target, and ``reward.*`` adds the
+energy costs (:mod:`swimrl.task`). Episodes are truncated when their flow has run
+``N = T / T_u`` decisions; with ``task=target`` a swimmer that arrives is terminated. Keys:
 
 * ``observation`` – the configured signal subset (``signals.names``), ``(F, S, k)``;
 * ``signals`` – all five signals in :data:`swimrl.physics.signals.SIGNAL_NAMES` order (baselines);
 * ``distance`` – ``|x - x_0|``, ``(F, S, 1)``;
+* ``target_distance`` – ``task=target`` only: ``|X - x|``, ``(F, S, 1)``;
 * ``action`` – ``Lambda``, ``(F, S, 1)``; ``reward``; ``done``/``terminated``/``truncated``.
 
 Partial resets (``_reset`` mask ``(F, S, 1)``) start new swimmers at uniformly random
-positions and orientations; a flow whose swimmers all reset also gets a new realisation.
+positions and orientations (and targets); a flow whose swimmers all reset also gets a new
+realisation, and a swimmer started in a running flow ends with it (the flow's clock
+truncates every episode in it, so the flows of a batch renew together).
 With ``ic_blocks = B > 1`` the ``S`` swimmers of a flow are ``B`` blocks of ``S / B`` that
 start from the same positions and orientations (common random numbers: one block per
 strategy in a paired comparison); the draws are those of an environment of ``S / B``
@@ -39,9 +45,11 @@ from torchrl.envs import EnvBase
 from swimrl.errors import ConfigError, IntegrityError, as_float, keep_number_types
 from swimrl.flows.base import GriddedFlow
 from swimrl.flows.build import FlowSpec, build_flow
+from swimrl.physics.energy import drag_factor
 from swimrl.physics.integrator import select_kernel
 from swimrl.physics.signals import SIGNAL_NAMES, compute_signals, signal_indices
 from swimrl.runtime import Runtime
+from swimrl.task import RewardSpec, TaskSpec
 
 
 def _ratio(num: float, den: float, key: str, value: float, what: str) -> int:
@@ -61,8 +69,9 @@ class EnvParams:
     """Swimmer and episode parameters (dimensionless: times / tau_K, speeds / u_rms).
 
     ``shape_factor_max`` (``Lambda_max``) bounds the action: the environment's action spec is
-    ``[-Lambda_max, Lambda_max]``, from which actors and baselines read it. The defaults (for
-    library calls) are the configs' ``swimmer.*``, ``episode.*`` and ``signals=all``
+    ``[-Lambda_max, Lambda_max]``, from which actors and baselines read it. ``task`` and
+    ``reward``: :mod:`swimrl.task`. The defaults (for library calls) are the configs'
+    ``swimmer.*``, ``episode.*``, ``signals=all``, ``task=displacement`` and ``reward.*``
     (``tests/test_config_sources.py``).
     """
 
@@ -73,6 +82,8 @@ class EnvParams:
     dt: float = 0.01
     shape_factor_max: float = 0.98
     signals: tuple[str, ...] = SIGNAL_NAMES
+    task: TaskSpec = TaskSpec()
+    reward: RewardSpec = RewardSpec()
     n_substeps: int = field(init=False)
     n_decisions: int = field(init=False)
 
@@ -107,7 +118,8 @@ class EnvParams:
 
 
 class SwimmerEnv(EnvBase):
-    """Shape-changing spheroidal swimmers maximising their distance from the start point."""
+    """Shape-changing spheroidal swimmers maximising their distance from the start point
+    (``task=displacement``) or reaching a target (``task=target``)."""
 
     def __init__(
         self,
@@ -141,6 +153,11 @@ class SwimmerEnv(EnvBase):
         self.dt = params.dt * flow.tau_k
         self.rot_kick_std = math.sqrt(2 * params.rot_diffusion / flow.tau_k * self.dt)
         self.reference_distance = self.swim_speed * params.duration * flow.tau_k  # v_s T
+        self.task = params.task
+        #: ``D`` and the arrival radius in flow units (``task.*`` are in units of ``ell_f``)
+        self.target_distance = params.task.distance * flow.ell_f
+        self.arrival_radius = params.task.arrival_radius * flow.ell_f
+        self.decision_length = self.swim_speed * params.update_interval * flow.tau_k  # v_s T_u
         dev = flow.device
         self._flow_index = torch.arange(flow.n_flows, device=dev).repeat_interleave(n_swimmers)
         self.pos = torch.zeros(batch + (2,), device=dev, dtype=dtype)
@@ -149,6 +166,17 @@ class SwimmerEnv(EnvBase):
         self.start_image = torch.zeros_like(self.image)
         self.theta = torch.zeros(batch, device=dev, dtype=dtype)
         self.step_count = torch.zeros(batch, device=dev, dtype=torch.int64)
+        #: Decisions since each flow's last reset, ``(F,)``: the clock that truncates episodes.
+        self.flow_step = torch.zeros(flow.n_flows, device=dev, dtype=torch.int64)
+        #: ``X - x_0`` of each swimmer's target (``task=target``), ``(F, S, 2)``.
+        self.target = torch.zeros(batch + (2,), device=dev, dtype=dtype)
+        #: Arrived swimmers and the decision at which they arrived (-1: not yet).
+        self.arrived = torch.zeros(batch, device=dev, dtype=torch.bool)
+        self.arrival_step = torch.full(batch, -1, device=dev, dtype=torch.int64)
+        #: ``E_hat`` so far: ``(1/T) int K(Lambda) dt`` (:mod:`swimrl.physics.energy`).
+        self.energy = torch.zeros(batch, device=dev, dtype=dtype)
+        #: The previous decision's ``Lambda`` (NaN before the first; the shape-change cost).
+        self.last_action = torch.full(batch, math.nan, device=dev, dtype=dtype)
         #: Upper bound of ``max_x |u(x, t)|`` of each flow since its last reset, ``(F,)``.
         self.max_flow_speed = torch.zeros(flow.n_flows, device=dev, dtype=dtype)
         self._flows = torch.arange(flow.n_flows, device=dev)
@@ -161,6 +189,9 @@ class SwimmerEnv(EnvBase):
             shape=batch,
             device=dev,
         )
+        if self.task.target:
+            self.observation_spec["target_distance"] = Unbounded(
+                shape=batch + (1,), device=dev, dtype=dtype)
         self.reward_spec = Unbounded(shape=batch + (1,), device=dev, dtype=dtype)
         self.done_spec = Composite(
             done=Categorical(2, shape=batch + (1,), dtype=torch.bool, device=dev),
@@ -211,30 +242,62 @@ class SwimmerEnv(EnvBase):
         self.pos.sub_(shift * length)
         self.image.add_(shift.to(torch.int64))
 
-    def signals(self, displacement: torch.Tensor | None = None) -> torch.Tensor:
-        """All five signals at the current state, ``(F, S, 5)`` (``displacement``: ``x - x0``
-        if already at hand)."""
+    def frame(self, displacement: torch.Tensor | None = None) -> torch.Tensor:
+        """The vector whose direction is the signals' ``e_r``: ``x - x_0``
+        (``task=displacement``) or ``X - x``, towards the target (``task=target``);
+        ``(F, S, 2)``."""
         if displacement is None:
             displacement = self.displacement()
+        return self.target - displacement if self.task.target else displacement
+
+    def signals(self, displacement: torch.Tensor | None = None) -> torch.Tensor:
+        """All five signals at the current state, ``(F, S, 5)``, in the task's frame
+        (:meth:`frame`; ``displacement``: ``x - x0`` if already at hand)."""
         q = self.flow.sample(self._flow_index, self.pos.view(-1, 2))
-        return compute_signals(q.view(*self.batch_size, 5), self.theta, displacement, self.tau_k)
+        return compute_signals(q.view(*self.batch_size, 5), self.theta,
+                               self.frame(displacement), self.tau_k)
 
     def _observe(self) -> TensorDict:
         disp = self.displacement()
         sig = self.signals(disp)
-        truncated = (self.step_count >= self.params.n_decisions).unsqueeze(-1)
-        return TensorDict(
-            {
-                "observation": sig[..., self._obs_idx],
-                "signals": sig,
-                "distance": disp.norm(dim=-1, keepdim=True),
-                "done": truncated.clone(),
-                "terminated": torch.zeros_like(truncated),
-                "truncated": truncated,
-            },
-            batch_size=self.batch_size,
-            device=self.device,
-        )
+        ended = (self.flow_step >= self.params.n_decisions).unsqueeze(1)
+        truncated = ended.expand(self.batch_size).unsqueeze(-1)
+        out = {
+            "observation": sig[..., self._obs_idx],
+            "signals": sig,
+            "distance": disp.norm(dim=-1, keepdim=True),
+            "done": truncated.clone(),
+            "terminated": torch.zeros_like(truncated),
+            "truncated": truncated,
+        }
+        if self.task.target:
+            arrived = self.arrived.unsqueeze(-1)
+            out.update(target_distance=(self.target - disp).norm(dim=-1, keepdim=True),
+                       terminated=arrived.clone(), done=truncated | arrived)
+        return TensorDict(out, batch_size=self.batch_size, device=self.device)
+
+    def score(self, td: TensorDictBase) -> torch.Tensor:
+        """The performance index of every swimmer in ``td`` (an observation), ``(F, S)``:
+        the undiscounted task return over ``v_s T`` (no energy cost), ``|x - x_0| / (v_s T)``
+        or ``(D - |X - x|) / (v_s T)``."""
+        if self.task.target:
+            remaining = td.get("target_distance").squeeze(-1)
+            return (self.target_distance - remaining) / self.reference_distance
+        return td.get("distance").squeeze(-1) / self.reference_distance
+
+    def outcomes(self) -> dict[str, torch.Tensor]:
+        """Per-swimmer results besides :meth:`score`, ``(F, S)`` each: ``energy``
+        (``E_hat``) and, for ``task=target``, ``arrived`` (0/1), ``arrival_time`` (units
+        ``tau_K``; NaN where not arrived) and ``final_distance`` (``|X - x|``, units
+        ``ell_f``)."""
+        out = {"energy": self.energy.clone()}
+        if self.task.target:
+            time = self.arrival_step.to(self.energy.dtype) * self.params.update_interval
+            rho = (self.target - self.displacement()).norm(dim=-1)
+            out.update(arrived=self.arrived.to(self.energy.dtype),
+                       arrival_time=torch.where(self.arrived, time, math.nan),
+                       final_distance=rho / self.flow.ell_f)
+        return out
 
     # -- EnvBase API ---------------------------------------------------------------------------
     def _reset(self, tensordict: TensorDictBase | None = None, **kwargs) -> TensorDictBase:
@@ -247,6 +310,7 @@ class SwimmerEnv(EnvBase):
         if flows.any():
             self.flow.reset(flows)
             self.max_flow_speed[flows] = 0
+            self.flow_step[flows] = 0
         k = int(mask.sum())
         if k:
             g, dev, dt = self.generator, self.device, self.pos.dtype
@@ -256,28 +320,87 @@ class SwimmerEnv(EnvBase):
             n = k // blocks  # swimmers drawn; each block of a flow gets the same draws
             new_pos = torch.rand(n, 2, generator=g, device=dev, dtype=dt) * self.flow.grid.length
             new_theta = torch.rand(n, generator=g, device=dev, dtype=dt) * (2 * math.pi)
+            angle = None
+            if self.task.target:  # X - x_0 = D (cos phi, sin phi)
+                angle = torch.rand(n, generator=g, device=dev, dtype=dt) * (2 * math.pi)
             if blocks > 1:
                 per_block = self.n_swimmers // blocks
                 new_pos = new_pos.view(-1, 1, per_block, 2).expand(-1, blocks, -1, -1)
                 new_pos = new_pos.reshape(k, 2)
                 new_theta = new_theta.view(-1, 1, per_block).expand(-1, blocks, -1).reshape(k)
+                if angle is not None:
+                    angle = angle.view(-1, 1, per_block).expand(-1, blocks, -1).reshape(k)
             self.pos[mask] = new_pos
             self.start_pos[mask] = new_pos
             self.image[mask] = 0
             self.start_image[mask] = 0
             self.theta[mask] = new_theta
             self.step_count[mask] = 0
+            if angle is not None:
+                self.target[mask] = self.target_distance * torch.stack(
+                    (torch.cos(angle), torch.sin(angle)), -1)
+            self.arrived[mask] = False
+            self.arrival_step[mask] = -1
+            self.energy[mask] = 0
+            self.last_action[mask] = math.nan
         return self._observe()
 
     def _step(self, tensordict: TensorDictBase) -> TensorDictBase:
         lam_max = self.params.shape_factor_max
         action = tensordict.get("action").reshape(-1).clamp(-lam_max, lam_max)
+        if self.task.target:
+            return self._step_target(action)
         dist_before = self.displacement().norm(dim=-1)
         self.integrate(action)
         self.step_count += 1
+        self.flow_step += 1
+        shape = action.view(self.batch_size)
+        cost = self._cost(shape, torch.ones_like(self.arrived))
         out = self._observe()
-        out.set("reward", (out.get("distance").squeeze(-1) - dist_before).unsqueeze(-1))
+        reward = out.get("distance").squeeze(-1) - dist_before
+        out.set("reward", (reward if cost is None else reward - cost).unsqueeze(-1))
         return out
+
+    def _step_target(self, action: torch.Tensor) -> TensorDictBase:
+        """One decision of ``task=target``: arrived swimmers stay where they are (no motion,
+        reward or energy); ``r_i = rho(t_{i-1}) - rho(t_i)`` for the others, who arrive when
+        ``rho <= task.arrival_radius``."""
+        moving = ~self.arrived
+        rho_before = (self.target - self.displacement()).norm(dim=-1)
+        frozen = (self.pos.clone(), self.image.clone(), self.theta.clone())
+        self.integrate(action)
+        if not bool(moving.all()):
+            keep = self.arrived.unsqueeze(-1)
+            self.pos.copy_(torch.where(keep, frozen[0], self.pos))
+            self.image.copy_(torch.where(keep, frozen[1], self.image))
+            self.theta.copy_(torch.where(self.arrived, frozen[2], self.theta))
+        self.step_count += 1
+        self.flow_step += 1
+        rho = (self.target - self.displacement()).norm(dim=-1)
+        now = moving & (rho <= self.arrival_radius)
+        self.arrived |= now
+        self.arrival_step[now] = self.step_count[now]
+        cost = self._cost(action.view(self.batch_size), moving)
+        reward = torch.where(moving, rho_before - rho, torch.zeros_like(rho))
+        out = self._observe()
+        out.set("reward", (reward if cost is None else reward - cost).unsqueeze(-1))
+        return out
+
+    def _cost(self, shape: torch.Tensor, moving: torch.Tensor) -> torch.Tensor | None:
+        """Account the decision just taken by the ``moving`` swimmers with shape factor
+        ``shape`` (``(F, S)``): ``E_hat += K(Lambda) T_u / T``; returns the reward's cost
+        ``w K(Lambda) v_s T_u + w_c |Lambda - Lambda_prev| v_s T_u`` (None when both weights
+        are 0)."""
+        drag = drag_factor(shape)
+        zero = torch.zeros_like(drag)
+        self.energy += torch.where(moving, drag, zero) / self.params.n_decisions
+        w, w_c = self.params.reward.energy_weight, self.params.reward.shape_change_weight
+        change = (shape - self.last_action).abs().nan_to_num(nan=0.0)
+        self.last_action = torch.where(moving, shape, self.last_action)
+        if w == 0 and w_c == 0:
+            return None
+        cost = (w * drag + w_c * change) * self.decision_length
+        return torch.where(moving, cost, zero)
 
     def integrate(self, shape_factor: torch.Tensor) -> None:
         """Advance all swimmers and flows by one decision interval with ``Lambda`` held fixed."""

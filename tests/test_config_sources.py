@@ -35,6 +35,7 @@ from swimrl.policies.baselines import StrategySpec
 from swimrl.policies.networks import ModelSpec, make_mlp, tanh_normal_actor, value_critic
 from swimrl.rl.plan import LossSettings, OptimSettings, TrainConfig, TrainSettings
 from swimrl.runtime import Runtime
+from swimrl.task import RewardSpec, TaskSpec
 
 #: The commands that evaluate swimmers in a flow (``conf/<name>.yaml``).
 EVALUATING = ("evaluate", "train", "compare", "naive_scan", "fit_minimal", "gain_scan")
@@ -76,6 +77,9 @@ def _plain(value):
         return str(value).replace("torch.", "")
     if isinstance(value, torch.device):
         return str(value)
+    if dataclasses.is_dataclass(value) and not isinstance(value, type):
+        return {f.name: _plain(getattr(value, f.name)) for f in dataclasses.fields(value)
+                if f.init}
     return value
 
 
@@ -101,7 +105,7 @@ def test_every_typed_config_of_swimrl_config_is_covered():
     """The dataclasses :mod:`swimrl.config` maps are all checked below."""
     mapped = {v for v in vars(swimrl.config).values() if dataclasses.is_dataclass(v)}
     covered = {*NO_DEFAULTS, StochasticSpec, StoredRunSpec, LiveDNSSpec, DNSParams, EnvParams,
-               Runtime, EvalSizes, CompareConfig, StrategySpec, DNSRun}
+               Runtime, EvalSizes, CompareConfig, StrategySpec, DNSRun, TaskSpec, RewardSpec}
     assert mapped <= covered, sorted(c.__name__ for c in mapped - covered)
 
 
@@ -137,7 +141,10 @@ def test_swimmer_episode_signals_and_runtime(name):
     cfg = _compose(name)
     swimmer = {k: f"swimmer.{k}" for k in ("swim_speed", "rot_diffusion", "shape_factor_max")}
     assert_defaults_are_the_yaml(EnvParams, cfg, "episode.",
-                                 keys={**swimmer, "signals": "signals.names"})
+                                 keys={**swimmer, "signals": "signals.names", "task": "task",
+                                       "reward": "reward"})
+    assert_defaults_are_the_yaml(TaskSpec, cfg, "task.")
+    assert_defaults_are_the_yaml(RewardSpec, cfg, "reward.")
     # threads differs between commands (evaluate: all cores, train: 1): no default
     for runtime in (Runtime, Runtime.from_names):
         assert "threads" not in defaults(runtime)

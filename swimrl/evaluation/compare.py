@@ -34,7 +34,13 @@ from swimrl.policies.baselines import STRATEGIES, StrategyLabel, StrategySpec
 from .jobs import Preemption
 from .records import summary_line, write_json
 from .rollout import Actor, EvalSetup, actor_for, check_chunks, evaluate_shared, flow_chunks
-from .statistics import paired_ratio
+from .statistics import paired_difference, paired_ratio
+
+#: Outcome keys a comparison row carries over from its strategy's metrics (where present).
+ROW_OUTCOMES = ("energy_mean", "energy_sem", "energy_std", "energy_per_flow", "arrival_mean",
+                "arrival_sem", "arrival_std", "arrival_per_flow", "final_distance_mean",
+                "final_distance_sem", "final_distance_std", "final_distance_per_flow",
+                "arrival_time_mean", "arrival_time_median", "n_arrived")
 
 #: Config keys that do not change a comparison's results (left out of a partial's identity).
 NOT_IDENTITY = (("overwrite",), ("threads",), ("eval", "progress"), ("compare", "resume"))
@@ -232,10 +238,17 @@ def compare(cfg: CompareConfig, partial: Path | None = None,
         rows.append({"label": m["label"], "R_hat_mean": m["R_hat_mean"],
                      "R_hat_sem": m["R_hat_sem"], "R_hat_std": m["R_hat_std"],
                      "ratio_to_first": ratio, "ratio_sem": ratio_sem, "per_flow": m["per_flow"],
+                     **{k: m[k] for k in ROW_OUTCOMES if k in m},
                      "swimmer_substeps_per_s": m["swimmer_substeps_per_s"],
                      "wall_s": m["wall_s"]})
+        if "arrival_per_flow" in m:
+            diff, diff_sem = paired_difference(m["arrival_per_flow"],
+                                               results[0]["arrival_per_flow"])
+            rows[-1].update(arrival_minus_first=diff, arrival_minus_first_sem=diff_sem)
     first = results[0]
     return {
+        "task": first["task"],
+        **{k: first[k] for k in ("target_distance", "arrival_radius") if k in first},
         "shared_flows": bool(cfg.shared_flows),
         "rows": rows,
         "n_flows": first["n_flows"],

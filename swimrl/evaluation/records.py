@@ -122,6 +122,9 @@ def summary_line(m: dict) -> str:
         f"{m['R_hat_sem']:.4f} (SEM; std over flows {m['R_hat_std']:.4f}) over {m['n_flows']} "
         f"flows x {m['n_swimmers']} swimmers; {m['wall_s']:.1f} s, "
         f"{m['swimmer_substeps_per_s']:.3g} swimmer-substeps/s"
+        + (f"; E_hat = {m['energy_mean']:.4f}" if "energy_mean" in m else "")
+        + (f"; arrived {m['arrival_mean']:.4f} +- {m['arrival_sem']:.4f}"
+           if "arrival_mean" in m else "")
     )
 
 
@@ -130,10 +133,27 @@ def comparison_markdown(record: dict) -> str:
     first = record["rows"][0]["label"]
     title = (f"{flow_display(record['config']['flow'])}, {record['n_flows']} flows x "
              f"{record['n_swimmers']} swimmers, seed {record['seed']}\n\n")
+    if record.get("task") == "target":
+        title = (f"target at {record['target_distance']:g} ell_f, arrival radius "
+                 f"{record['arrival_radius']:g} ell_f; " + title)
     head = ["strategy", "R_hat (mean +- SEM)", "std over flows", f"ratio to {first} (paired)"]
     rows = [[r["label"], f"{r['R_hat_mean']:.4f} +- {r['R_hat_sem']:.4f}",
              f"{r['R_hat_std']:.4f}", f"{r['ratio_to_first']:.3f} +- {r['ratio_sem']:.3f}"]
             for r in record["rows"]]
+    if all("energy_mean" in r for r in record["rows"]):
+        head.append("E_hat (mean +- SEM)")
+        for row, r in zip(rows, record["rows"], strict=True):
+            row.append(f"{r['energy_mean']:.4f} +- {r['energy_sem']:.4f}")
+    if all("arrival_mean" in r for r in record["rows"]):
+        head += ["arrived (mean +- SEM)", f"arrived - {first} (paired)",
+                 "arrival time mean / median (tau_K)", "final distance (ell_f)"]
+        for row, r in zip(rows, record["rows"], strict=True):
+            times = ("-" if r["arrival_time_mean"] is None else
+                     f"{r['arrival_time_mean']:.1f} / {r['arrival_time_median']:.1f}")
+            row += [f"{r['arrival_mean']:.4f} +- {r['arrival_sem']:.4f}",
+                    f"{r['arrival_minus_first']:+.4f} +- {r['arrival_minus_first_sem']:.4f}",
+                    times,
+                    f"{r['final_distance_mean']:.2f} +- {r['final_distance_sem']:.2f}"]
     return title + markdown_table(head, rows)
 
 

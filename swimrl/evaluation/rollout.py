@@ -35,7 +35,7 @@ from swimrl.policies.baselines import StrategySpec, build_strategy
 from swimrl.policies.files import load_policy
 from swimrl.runtime import Runtime, check_memory
 
-from .statistics import flow_statistics, mean_flow_stats
+from .statistics import chunk_outcomes, flow_statistics, mean_flow_stats, outcome_statistics
 from .trajectories import TrajectoryRecorder
 
 #: A strategy to evaluate: a baseline (built against the environment's action spec) or an
@@ -144,7 +144,8 @@ def run_episodes(
     progress: tqdm | None = None,
     on_decision: Callable[[int, TensorDictBase], None] | None = None,
 ) -> torch.Tensor:
-    """One full episode of every swimmer of ``env``; returns ``R_hat`` ``(F, S)``.
+    """One full episode of every swimmer of ``env``; returns ``R_hat`` ``(F, S)``
+    (:meth:`~swimrl.env.SwimmerEnv.score`; the other outcomes: ``env.outcomes()``).
 
     ``on_decision(i, td)`` sees decision ``i`` (signals and action) before the step.
     """
@@ -156,7 +157,7 @@ def run_episodes(
         td = env.step(td).get("next")
         if progress is not None:
             progress.update(1)
-    return td.get("distance").squeeze(-1) / env.reference_distance
+    return env.score(td)
 
 
 class SplitActor(nn.Module):
@@ -208,7 +209,8 @@ def evaluate_shared(setup: EvalSetup, actors: Sequence[Actor], desc: str = "eval
 
     Resumable by flow chunk: chunk ``c`` depends only on ``(seed, c)``, so the chunk results
     ``done`` (``{"chunk": c, "per_flow": [[..] per actor], "flow_stats": .., "sim_s": ..,
-    "wall_s": ..}``, as handed to ``on_chunk`` after each chunk) stand for chunks
+    "wall_s": .., "outcomes": [.. per actor]}``, :func:`~.statistics.chunk_outcomes`, as
+    handed to ``on_chunk`` after each chunk) stand for chunks
     ``0 .. len(done) - 1``, which are not simulated again; the per-flow results are the
     uninterrupted evaluation's, and the times add up over the legs."""
     sizes, params = setup.sizes, setup.params
@@ -239,8 +241,12 @@ def evaluate_shared(setup: EvalSetup, actors: Sequence[Actor], desc: str = "eval
             recorder.finish(r_hat)
         chunk_s = time.perf_counter() - t0
         result = [r_hat[:, j * s:(j + 1) * s].mean(dim=1).cpu().tolist() for j in range(k)]
+        outcomes = env.outcomes()
+        per_actor = [chunk_outcomes(outcomes, slice(j * s, (j + 1) * s), params.update_interval)
+                     for j in range(k)]
         results.append({"chunk": c, "per_flow": result, "flow_stats": env.flow.measured_stats(),
-                        "sim_s": chunk_s, "wall_s": time.perf_counter() - t_chunk})
+                        "sim_s": chunk_s, "wall_s": time.perf_counter() - t_chunk,
+                        "outcomes": per_actor})
         if on_chunk is not None:
             on_chunk(results[-1])
     bar.close()
@@ -255,7 +261,14 @@ def evaluate_shared(setup: EvalSetup, actors: Sequence[Actor], desc: str = "eval
     if isinstance(setup.flow, StoredRunSpec):
         records = [store_record(p) for p in setup.flow.paths]
         store = {"flow_store": records[0]} if len(records) == 1 else {"flow_stores": records}
-    return [{**flow_statistics(per_flow[j]), "n_flows": n_flows, "n_swimmers": s,
+    outcomes = [outcome_statistics([chunk.get("outcomes", [{}] * k)[j] for chunk in results],
+                                   params.update_interval) for j in range(k)]
+    task = {"task": params.task.name}
+    if params.task.target:
+        task.update(target_distance=params.task.distance,
+                    arrival_radius=params.task.arrival_radius)
+    return [{**flow_statistics(per_flow[j]), **outcomes[j], **task,
+             "n_flows": n_flows, "n_swimmers": s,
              "seed": setup.seed, "flow_stats": flow_stats, **store, "wall_s": wall,
              "swimmer_substeps_per_s": substeps / sim_s, "config": setup.record}
             for j in range(k)]

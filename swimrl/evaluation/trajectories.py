@@ -16,6 +16,8 @@ swimmers and ``N`` decisions; lengths in ``l_f``, times in ``tau_K``, signals as
   ``[-Lambda_max, Lambda_max]`` as the environment applies it);
 * ``position`` ``(F, K, n, N+1, 2)``, ``theta`` ``(F, K, n, N+1)``, ``time`` ``(N+1,)``;
 * ``R_hat`` ``(F, K, n)``, ``reference_distance`` ``v_s T``, ``box`` the period ``L``;
+* with ``task=target``: ``target`` ``(F, K, n, 2)`` (the unwrapped target position ``X``),
+  ``arrival_time`` ``(F, K, n)`` (NaN: not arrived), ``arrival_radius``;
 * with ``field_every = m > 0``: ``vorticity`` ``(frames, n_g, n_g)``, ``omega tau_K`` of the
   first flow on every ``field_stride``-th grid node (``[y, x]``) at decisions ``0, m, 2m,
   ...`` and at ``T`` (times ``field_time``).
@@ -97,6 +99,14 @@ class TrajectoryRecorder:
         out = {k: torch.stack(v, dim=2).numpy() for k, v in self._cur.items()}
         chunk = {k: v.reshape(shape + v.shape[2:]) for k, v in out.items()}
         chunk["R_hat"] = r_hat[:, self._sel].cpu().double().numpy().reshape(shape)
+        env = self._env
+        if env.task.target:
+            start = env.start_pos + env.flow.grid.length * env.start_image.to(env.pos.dtype)
+            target = (start + env.target)[:, self._sel].cpu().numpy()
+            chunk["target"] = target.reshape(shape + (2,))
+            arrival = env.outcomes()["arrival_time"][:, self._sel].cpu().double().numpy()
+            chunk["arrival_time"] = arrival.reshape(shape)
+            self.meta["arrival_radius"] = float(env.arrival_radius)
         self._chunks.append(chunk)
         self._env = None
 

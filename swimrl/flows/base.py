@@ -65,6 +65,13 @@ class GriddedFlow:
     u_rms: float = 1.0
     tau_k: float = 1.0
 
+    @property
+    def ell_f(self) -> float:
+        """The flow length ``ell_f`` (units of targets, :mod:`swimrl.task`): ``2 u_rms tau_K``,
+        the stochastic flow's relation ``tau_K = ell_f / (2 u_rms)``, which a flow with its own
+        correlation length (:class:`~swimrl.flows.stochastic.StochasticFlow`) overrides."""
+        return 2.0 * self.u_rms * self.tau_k
+
     def __init__(self, grid: PeriodicGrid, n_flows: int, n_basis: int, device, dtype,
                  n_rows: int | None = None):
         self.grid = grid

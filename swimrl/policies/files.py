@@ -191,11 +191,14 @@ def load_file(path: Path, map_location="cpu") -> dict:
 
 
 def env_params_dict(params: EnvParams) -> dict:
-    """Constructor arguments of ``params`` as plain Python values."""
+    """Constructor arguments of ``params`` as plain Python values (the task and reward specs
+    as dicts)."""
     out = {}
     for f in dataclasses.fields(params):
         if f.init:
             v = getattr(params, f.name)
+            if dataclasses.is_dataclass(v):
+                v = dataclasses.asdict(v)
             out[f.name] = list(v) if isinstance(v, tuple) else v
     return out
 

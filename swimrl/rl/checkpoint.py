@@ -47,7 +47,9 @@ LEGACY_KEYS = {
 #: (stochastic flow: the readings of the paper's specification, conf/flow/stochastic.yaml;
 #: replay: decoding on the run's grid, one start per flow; every flow: no bound on sigma).
 ADDED_KEYS = {
-    "*": {"model.min_std": NO_STD_BOUND},  # every flow
+    "*": {"model.min_std": NO_STD_BOUND,  # every flow
+          "task": {"name": "displacement", "distance": 20.0, "arrival_radius": 1.0},
+          "reward": {"energy_weight": 0.0, "shape_change_weight": 0.0}},
     "stochastic": {
         "flow.amplitudes": "stationary",
         "flow.basis": "redrawn",
@@ -69,7 +71,7 @@ def upgrade_config(config: dict) -> dict:
         *path, last = key.split(".")
         node = _node(out, path)
         if node is not None:
-            node.setdefault(last, value)
+            node.setdefault(last, _copy(value))
     for old, new in LEGACY_KEYS.items():
         *path, last = old.split(".")
         parent = _node(out, path)

@@ -333,7 +333,6 @@ class PPOTrainer:
             disable=not cfg.train.progress,
             mininterval=5.0,
         )
-        ref = self.swimmer_env.reference_distance
         t_ckpt = t_prev = time.perf_counter()
         try:
             for data in collector:
@@ -341,8 +340,7 @@ class PPOTrainer:
                 done = data["next", "done"].squeeze(-1)
                 r_hat_train = None
                 if bool(done.any()):
-                    dist = data["next", "distance"].squeeze(-1)[done]
-                    r_hat_train = float(dist.mean()) / ref
+                    r_hat_train = float(self.swimmer_env.score(data["next"])[done].mean())
                 lrs = [float(s.get_last_lr()[0]) for s in self.schedulers]
                 action_abs = data["action"].abs().mean()
                 stats = self.update(data)

@@ -1,0 +1,76 @@
+r"""What the swimmers are asked to do (``task=``) and what swimming costs (``reward.*``).
+
+``task=displacement`` (the paper): get far from the start point; the reward per decision is
+``r_i = |x(t_i) - x_0| - |x(t_{i-1}) - x_0|``, the signals are taken in the polar frame of
+``x - x_0``.
+
+``task=target`` (point-to-point navigation): each swimmer gets a target
+``X = x_0 + D (cos phi, sin phi)``, ``D`` = ``task.distance`` in units of the flow length
+``ell_f``, ``phi`` uniform; with ``rho = |X - x|`` the reward per decision is
+
+``r_i = rho(t_{i-1}) - rho(t_i)``,
+
+which telescopes to ``D - rho_final``. A swimmer with ``rho <= task.arrival_radius``
+(``ell_f``) has arrived: its episode ends (``terminated``, no bootstrap), it stops (no further
+motion, reward or energy) and stays counted as arrived. The signals are taken in the frame
+of ``X - x`` (``n_r = n . e``, ``e`` the unit vector towards the target).
+
+In both tasks the performance index is the undiscounted return over ``v_s T``
+(``R_hat = |x(T) - x_0| / (v_s T)``, resp. ``(D - rho_final) / (v_s T)``).
+
+Energy (``reward.*``, :mod:`swimrl.physics.energy`): a decision with shape factor ``Lambda_i``
+costs ``w K(Lambda_i) v_s T_u`` (``w`` = ``reward.energy_weight``) plus, optionally,
+``w_c |Lambda_i - Lambda_{i-1}| v_s T_u`` (``w_c`` = ``reward.shape_change_weight``; none at a
+swimmer's first decision), so the return over ``v_s T`` is ``R_hat - w E_hat - ...`` with
+``E_hat = (1/T) int K(Lambda) dt`` the work against drag in units of the equal-volume
+sphere's ``6 pi mu a v_s^2 T``.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+from swimrl.errors import as_float, keep_number_types, one_of
+
+#: The tasks (``task=NAME``); the first is the default.
+TASKS = ("displacement", "target")
+
+
+@dataclass(frozen=True)
+class TaskSpec:
+    """``task.*``: the task's name, the target distance ``D`` and the arrival radius (both in
+    units of ``ell_f``; read by ``task=target`` only). The defaults are
+    ``conf/task/displacement.yaml``'s (``tests/test_config_sources.py``)."""
+
+    name: str = "displacement"
+    distance: float = 20.0
+    arrival_radius: float = 1.0
+
+    def __post_init__(self) -> None:
+        one_of("task.name", self.name, TASKS)
+        as_float("task.distance", self.distance, lambda v: v > 0, "> 0 (units ell_f)")
+        as_float("task.arrival_radius", self.arrival_radius,
+                 lambda v: 0 < v < float(self.distance),
+                 f"in (0, task.distance={self.distance}) (units ell_f)")
+        keep_number_types(self)
+
+    @property
+    def target(self) -> bool:
+        """True for point-to-point navigation."""
+        return self.name == "target"
+
+
+@dataclass(frozen=True)
+class RewardSpec:
+    """``reward.*``: weights of the energy cost ``w K(Lambda) v_s T_u`` and of the
+    shape-change cost ``w_c |Delta Lambda| v_s T_u`` per decision (0: the paper's reward).
+    The defaults are ``conf/evaluate.yaml``'s."""
+
+    energy_weight: float = 0.0
+    shape_change_weight: float = 0.0
+
+    def __post_init__(self) -> None:
+        as_float("reward.energy_weight", self.energy_weight, lambda v: v >= 0, ">= 0")
+        as_float("reward.shape_change_weight", self.shape_change_weight, lambda v: v >= 0,
+                 ">= 0")
+        keep_number_types(self)
