@@ -55,15 +55,45 @@ def test_snn_statistic_on_a_synthetic_record():
     assert st["p_neg_given_high"] == 1.0
 
 
+def test_streamed_decision_statistics_equal_the_one_shot_ones():
+    """DecisionStats fed decision by decision (ranges from the first) gives the maps of
+    binned_mean on those ranges, the S_nn statistic of snn_extremes (up to one bin of the
+    S_nn histogram), and the correlation of all decisions."""
+    sig, lam = _record(400, 50)
+    sig[..., 2] = RNG.normal(size=sig.shape[:2])
+    lam = np.where(sig[..., 2] < -2, 0.9, lam)
+    st = mechanism.DecisionStats()
+    for i in range(sig.shape[1]):
+        st.add(sig[:, i], lam[:, i])
+    a = st.arrays()
+    mean, edges = mechanism.map_mean(a, "n_theta")
+    ref, _, _ = binned_mean(lam, [sig[..., 3], sig[..., 1]], bins=30,
+                            ranges=[(e[0], e[-1]) for e in edges], min_count=5)
+    assert np.allclose(mean, ref, equal_nan=True) and np.isfinite(mean).sum() > 500
+    assert edges[1][0] == -1 and edges[0][-1] == -edges[0][0]
+    got, want = mechanism.snn_statistic(a), snn_extremes(sig[..., 2], lam)
+    assert got["n"] == want["n"] == lam.size
+    assert abs(got["n_low"] - want["n_low"]) <= 3 and abs(got["n_high"] - want["n_high"]) <= 3
+    assert got["p_pos_given_low"] == pytest.approx(want["p_pos_given_low"], abs=0.02)
+    assert got["p_neg_given_high"] == pytest.approx(want["p_neg_given_high"], abs=0.02)
+    assert mechanism.correlation(a) == pytest.approx(
+        np.corrcoef((sig[..., 1] * sig[..., 3]).ravel(), lam.ravel())[0, 1])
+    assert mechanism.map_correlation(a, a, "omega") == pytest.approx(1.0)
+
+
 def test_figure_functions_on_tiny_records(tmp_path):
     sig, lam = _record()
     n_dec = sig.shape[1]
     traj = np.cumsum(RNG.normal(0, 0.1, (3, 2, n_dec + 1, 2)), axis=2)
-    out = mechanism.fig_ku01(traj, sig, lam, sig[:2], np.sign(sig[:2, :, 1]), tmp_path / "a.png")
+    stats = mechanism.decision_stats(sig, lam)
+    out = mechanism.fig_ku01(traj, stats, sig[:2], np.sign(sig[:2, :, 1]), tmp_path / "a.png")
     assert out["corr_smart"] > 0.8 and (tmp_path / "a.png").stat().st_size > 0
-    ku_inf = mechanism.fig_ku_inf(sig, lam, tmp_path / "b.png")
+    assert out["corr_smart"] == pytest.approx(
+        np.corrcoef((sig[..., 1] * sig[..., 3]).ravel(), lam.ravel())[0, 1])
+    ku_inf = mechanism.fig_ku_inf(stats, tmp_path / "b.png")
     assert ku_inf["snn"]["n"] == lam.size and ku_inf["b"].shape == (30, 30)
-    pattern = mechanism.fig_ku_pattern({0.1: (sig, lam), 10.0: (sig, -lam)}, tmp_path / "c.png")
+    pattern = mechanism.fig_ku_pattern({0.1: stats, 10.0: mechanism.decision_stats(sig, -lam)},
+                                       tmp_path / "c.png")
     top = pattern[(0.1, "n_theta")]
     assert np.nanmean(top[-5:, -5:]) > 0.5 and np.nanmean(top[:5, -5:]) < -0.5  # S_np x n_theta
     vort = RNG.normal(size=(8, 8))
@@ -83,9 +113,9 @@ def test_figure_functions_on_tiny_records(tmp_path):
         "ku10_seed0": 0.62, "ku1e7_seed0": 0.71}
     assert PAPER_EPISODE_FRAMES == 20000
     r = {"smart": np.array([1.2, 1.0]), "naive": np.array([0.5, 0.5]), "STO": np.array([1, 1.0])}
-    sweep = robustness.fig_sweep(np.array([1e-3, 1e-2]), r, {k: 0 * v for k, v in r.items()},
-                                 "x", tmp_path / "g.png", ratio=True)
-    assert sweep["ratio"] == pytest.approx([1.2, 1.0])
+    sweep = robustness.fig_sweep(np.array([0.0, 1e-2]), r, {k: 0 * v for k, v in r.items()},
+                                 "x", tmp_path / "g.png", ratio=(r["smart"], np.full(2, 0.01)))
+    assert sweep["ratio"] == pytest.approx([1.2, 1.0]) and sweep["ratio_sem"] == [0.01, 0.01]
 
 
 def test_ku_record_is_cached_and_consistent(compose_cfg, tmp_path):
@@ -95,7 +125,8 @@ def test_ku_record_is_cached_and_consistent(compose_cfg, tmp_path):
         out=tmp_path / "fig", cache=tmp_path / "cache")
     a = records.ku_record(cfg, 10.0)
     assert a["final"].shape == (3, 6, 2) and a["traj"].shape == (3, 2, 11, 2)
-    assert a["signals"].shape == (6, 10, 5) and a["sto_Lambda"].shape == (4, 10)
+    assert a["sto_signals"].shape == (4, 10, 5) and a["sto_Lambda"].shape == (4, 10)
+    assert np.allclose(a["per_flow"], a["R_hat"].reshape(3, 2, 3).mean(-1))
     assert np.allclose(a["traj"][:, :, -1], a["final"][:, :2], atol=1e-5)
     ref = 0.707 * 1.0 * 0.5  # v_s T in flow units (tau_K = 0.5 l_f / u_rms)
     assert np.linalg.norm(a["final"], axis=-1) / ref == pytest.approx(a["R_hat"], rel=1e-3)
@@ -246,3 +277,54 @@ def test_builders_are_the_configured_figures():
     """``only=`` is checked against :data:`records.FIGURES` (without importing the builders):
     the same names, in build order, as :data:`BUILDERS`."""
     assert tuple(BUILDERS) == records.FIGURES
+
+
+def _held_out_comparison(path, runs, signals, sto=0.5, seed=0, n_flows=2, n_swimmers=4,
+                         kubo=10.0):
+    """``held_out/<run>/comparison.json`` (or the protocol's): STO, naive and one policy row
+    per run directory ``runs`` (name -> smart R_hat), on the test seed's flows."""
+    rows = [{"label": "sto", "R_hat_mean": sto, "ratio_to_first": 1.0, "ratio_sem": 0.0},
+            {"label": "naive(+0.98)", "R_hat_mean": 0.3, "ratio_to_first": 0.3 / sto,
+             "ratio_sem": 0.01}]
+    rows += [{"label": f"policy({d / 'policy.pt'})", "R_hat_mean": smart,
+              "ratio_to_first": smart / sto, "ratio_sem": 0.005} for d, smart in runs.items()]
+    path.mkdir(parents=True, exist_ok=True)
+    (path / "comparison.json").write_text(json.dumps({
+        "rows": rows, "n_flows": n_flows, "n_swimmers": n_swimmers, "seed": seed,
+        "config": {"signals": {"names": list(signals)}, "flow": {"kubo": kubo}}}))
+
+
+def test_held_out_ablation_layout(tmp_path):
+    """ablation (a) from ``<ablation>/held_out/<run>/comparison.json`` (one policy row: the
+    run's policy.pt) and the protocol's comparison at the runs' Ku (the all-signal runs, one
+    row per seed); the held-out sizes may differ in swimmers, not in flows or seed."""
+    root, runs_root, protocol = tmp_path / "ablation", tmp_path / "runs", tmp_path / "protocol"
+    nth = _ablation_run(root, ("n_theta", "S_np"), 0, 0.5, 0.5)
+    (nth / "policy.pt").write_bytes(b"policy")
+    _held_out_comparison(root / "held_out" / nth.name, {nth: 0.49}, ("n_theta", "S_np"))
+    every = ("n_r", "n_theta", "S_nn", "S_np", "omega")
+    seeds = [_ablation_run(runs_root, every, s, 0.7, 0.5, name=f"ku10_seed{s}") for s in (0, 1)]
+    for d in seeds:
+        (d / "policy.pt").write_bytes(b"policy")
+    _held_out_comparison(protocol / "ku10", {d: 0.65 + 0.01 * i for i, d in enumerate(seeds)},
+                         every, n_swimmers=10)
+    runs, held, files = ablation.read_held_out(root, protocol)
+    assert held == {"seed": 0, "n_flows": 2} and len(runs) == 3
+    assert [(r.signals, r.seed, r.held_out) for r in runs] == [
+        (("n_theta", "S_np"), 0, (2, 4)), (every, 0, (2, 10)), (every, 1, (2, 10))]
+    assert runs[0].ratio == pytest.approx(0.98) and runs[2].smart == pytest.approx(0.66)
+    assert {p.name for p in files} == {"comparison.json", "metrics.json", "policy.pt",
+                                       "curves.csv"}
+    summary = ablation.summarise_sets(runs)
+    table = ablation.held_out_markdown(runs, summary, held["seed"]).splitlines()
+    assert "(evaluation seed 0)" in table[0] and "| 2 x 10 |" in table[4]
+    _held_out_comparison(protocol / "ku10", {seeds[0]: 0.7}, every, seed=3)
+    with pytest.raises(ValueError, match="differ in held-out seed") as err:
+        ablation.read_held_out(root, protocol)
+    assert "\n" not in str(err.value)
+    _held_out_comparison(protocol / "ku10", {seeds[0]: 0.7}, ("n_theta", "S_np"))
+    with pytest.raises(ValueError, match="trained with"):
+        ablation.read_held_out(root, protocol)
+    _held_out_comparison(protocol / "ku10", {runs_root / "gone": 0.7}, every)
+    with pytest.raises(ValueError, match="no run directory"):
+        ablation.read_held_out(root, protocol)

@@ -1,8 +1,13 @@
 r"""``swimrl-figures``: the paper's figures into ``docs/figures/`` (:mod:`swimrl.analysis.figures`).
 
-    swimrl-figures                         # all, evaluations cached under outputs/figures_cache
+    swimrl-figures                         # all, from the records in docs/results/figures/
     swimrl-figures only=kuInf              # one figure
-    swimrl-figures figures.n_swimmers=200  # smaller records (sizes go into the titles)
+    swimrl-figures only=robustness figures.refresh=[robustness]   # remake its record
+
+Every number a figure draws comes from its record ``<records>/<figure>.json`` (made, where it
+is missing, from the evaluations cached under ``outputs/figures_cache``); a record made for
+other sizes, seeds or policy files is refused in one line (exit status 2) that says how to
+remake it.
 """
 
 from __future__ import annotations

@@ -2,7 +2,11 @@ r"""The paper's figures from the shipped policies and the committed records (``s
 
 Each figure has a ``fig_<name>(data..., path)`` function that draws it from arrays and returns
 what it drew, and a ``build_<name>(cfg)`` builder that gathers the arrays (evaluations cached
-by :func:`.records.cached`, committed records) and calls it. One module per family of figures,
+by :func:`.records.cached`, committed records) and calls it. The numbers a figure states (its
+titles, its tables, what the docs quote) come from its figure record
+``docs/results/figures/<figure>.json`` (:func:`.records.figure_record`: sizes, seeds, the
+sha256 of every policy and source file, per-flow values, the derived numbers), made once and
+refused when the config would evaluate something else. One module per family of figures,
 above the two modules they share:
 
 * :mod:`.stochastic`: Fig. 1(a) (swimmer) and smartPerformance;
@@ -12,8 +16,8 @@ above the two modules they share:
 * :mod:`.robustness`: robustness-noise and robustness;
 * :mod:`.dns`: dnsFlow and its replay record;
 * :mod:`.videos`: the supplemental videos 1-10;
-* :mod:`.records`: the configuration (:class:`~.records.FiguresConfig`), the evaluation
-  records and their cache; :mod:`.style`: colours, labels, drawing and saving;
+* :mod:`.records`: the configuration (:class:`~.records.FiguresConfig`), the figure records,
+  the evaluations and their cache; :mod:`.style`: colours, labels, drawing and saving;
 * :mod:`.build`: :data:`~.build.BUILDERS` (name -> builder, in build order) and
   :func:`~.build.build_figures`.
 

@@ -1,5 +1,17 @@
-"""Fig. ablation: (a) smart / STO per signal set (:mod:`swimrl.analysis.signal_ablation`),
-(b), (c) the minimal model with the coefficients fitted at each Ku (``swimrl-fit-minimal``)."""
+"""Fig. ablation: (a) smart / STO per signal set, (b), (c) the minimal model with the
+coefficients fitted at each Ku (``swimrl-fit-minimal``).
+
+(a) reads the runs' held-out comparisons (:func:`read_held_out`): every ``comparison.json``
+under ``<ablation>/held_out/`` (one per reduced-signal run) and the protocol's comparison at
+the runs' Ku (``<results>/ku<KU>/comparison.json``, whose policy rows are the all-signal runs
+``<curves>/ku<KU>_seed<k>``); a policy row names its run's ``policy.pt``, whose directory holds
+the run's ``metrics.json`` (signals, seed, Ku, budget) and ``curves.csv``. All comparisons
+evaluate on the same held-out flows (one seed, one number of flows; the swimmers per flow may
+differ). (b) evaluates smart, the minimal model and STO at each Ku on ``robust_flows`` x
+``robust_swimmers`` (the record's evaluations); (c) draws the fits. The figure's record
+``<records>/ablation.json`` holds (b)'s per-flow values and the numbers of (a), (b), (c), with
+the sha256 of every file (a) and (c) read.
+"""
 
 from __future__ import annotations
 
@@ -13,17 +25,27 @@ import numpy as np
 from swimrl.analysis.plots import pyplot
 from swimrl.analysis.signal_ablation import (
     AblationRun,
-    ablation_markdown,
+    canonical,
     draw_curves,
     draw_ratios,
-    read_ablation,
     summarise_sets,
 )
 from swimrl.atomic import atomic_write_text
-from swimrl.flows.labels import ku_display, ku_number
+from swimrl.evaluation.records import markdown_table, read_curves
+from swimrl.flows.labels import ku_display, ku_name
 from swimrl.policies.baselines import StrategyLabel
+from swimrl.policies.files import RunLayout
 
-from .records import FiguresConfig, eval_setup, flow_stats, per_flow_record, smart_policy
+from .records import (
+    Evaluation,
+    FiguresConfig,
+    eval_setup,
+    figure_record,
+    per_flow_values,
+    record_sizes,
+    smart_policy,
+    under_shipped_before,
+)
 from .style import COLORS, save, shown
 
 
@@ -69,10 +91,11 @@ def _draw_minimal(b, c, kus: np.ndarray, r: dict[str, np.ndarray], err: dict[str
 
 def fig_ablation(kus: np.ndarray, r: dict[str, np.ndarray], err: dict[str, np.ndarray],
                  coeffs: dict[str, np.ndarray], coeff_err: dict[str, np.ndarray], path: Path,
-                 title: str = "", runs: list[AblationRun] | None = None) -> dict:
-    """(a) smart / STO per signal set (the training multirun's ``runs``, at one Ku; "no
-    records" where there are none) and (a') their held-out curves; (b) R_hat of smart, the minimal
-    model (fitted at each Ku) and STO against Ku; (c) the fitted c1..c4 against Ku."""
+                 title: str = "", runs: list[AblationRun] | None = None,
+                 held_out_seed: int | None = None) -> dict:
+    """(a) smart / STO per signal set (the runs' held-out comparisons ``runs``, at one Ku;
+    "no records" where there are none) and (a') their held-out curves; (b) R_hat of smart, the
+    minimal model (fitted at each Ku) and STO against Ku; (c) the fitted c1..c4 against Ku."""
     plt = pyplot()
     fig, axes = plt.subplots(2, 2, figsize=(10, 7.6))
     (a, a2), (b, c) = axes
@@ -83,7 +106,7 @@ def fig_ablation(kus: np.ndarray, r: dict[str, np.ndarray], err: dict[str, np.nd
         out["ablation"] = {s["label"]: {"seeds": s["seeds"], "ratios": s["ratios"].tolist(),
                                         "mean": s["mean"], "std": s["std"]} for s in summary}
         out["curves_last"] = draw_curves(a2, runs, summary)
-        out["table"] = ablation_markdown(runs, summary)
+        out["table"] = held_out_markdown(runs, summary, held_out_seed)
         kubo, frames = runs[0].kubo, runs[0].frames
         a.set_title(f"(a) signal ablation, {ku_display(kubo)}, {frames / 1e6:g}M frames per run",
                     fontsize=9)
@@ -101,41 +124,180 @@ def fig_ablation(kus: np.ndarray, r: dict[str, np.ndarray], err: dict[str, np.nd
             **{k: np.asarray(v).tolist() for k, v in coeffs.items()}, **out}
 
 
+def held_out_markdown(runs: list[AblationRun], summary: list[dict],
+                      seed: int | None = None) -> str:
+    """The table of Fig. ablation (a): per signal set, each seed's smart and STO R_hat and
+    paired ratio on the held-out flows, and the mean and std over seeds of the ratio."""
+    flows = sorted({r.held_out[0] for r in runs})
+    intro = (f"{ku_display(runs[0].kubo)}, {runs[0].frames / 1e6:g}M frames per run; each run's "
+             f"smart and STO on the same {'/'.join(map(str, flows))} held-out flows"
+             + (f" (evaluation seed {seed})" if seed is not None else "") + "\n\n")
+    head = ["signals", "seeds", "smart R̂ per seed", "STO R̂ per seed",
+            "smart / STO per seed (paired ± SEM)", "held-out flows x swimmers",
+            "mean ± std over seeds"]
+    rows = []
+    for s in summary:
+        mine = sorted((r for r in runs if r.signals == s["signals"]), key=lambda r: r.seed)
+        sizes = sorted({f"{r.held_out[0]} x {r.held_out[1]}" for r in mine})
+        rows.append([", ".join(s["signals"]), ", ".join(map(str, s["seeds"])),
+                     ", ".join(f"{r.smart:.3f}" for r in mine),
+                     ", ".join(f"{r.sto:.3f}" for r in mine),
+                     ", ".join(f"{r.ratio:.3f} ± {r.ratio_sem:.3f}" for r in mine),
+                     ", ".join(sizes), f"**{s['mean']:.3f} ± {s['std']:.3f}**"])
+    return intro + markdown_table(head, rows)
+
+
+def _comparison_runs(cmp_path: Path, files: list[Path],
+                     run_dir: Path | None = None) -> tuple[list[AblationRun], dict]:
+    """The runs of the policy rows of one held-out comparison and the comparison's ``seed``
+    and ``n_flows``; the files read are appended to ``files``. A row's run directory is
+    ``run_dir`` (``held_out/<run>/``: one policy row, the run's policy by its directory's
+    name, wherever it was evaluated from) or else the directory of the ``policy.pt`` it names.
+    ValueError (one line) where the comparison is not of its runs."""
+    cmp = json.loads(Path(cmp_path).read_text())
+    rows = cmp.get("rows") or []
+    policy = [r for r in rows if StrategyLabel.parse(r["label"]).name == "policy"]
+    if (not rows or rows[0]["label"] != StrategyLabel("sto").label or not policy
+            or (run_dir is not None and len(policy) != 1)):
+        raise ValueError(f"{cmp_path}: expected STO first and "
+                         f"{'one policy row' if run_dir else 'one policy row or more'}, got "
+                         f"{[r['label'] for r in rows]}")
+    cmp_cfg = cmp["config"]
+    files.append(Path(cmp_path))
+    out = []
+    for row in policy:
+        named = Path(StrategyLabel.parse(row["label"]).arg)
+        run = RunLayout(run_dir if run_dir is not None else named.parent)
+        if named.parent.name != run.root.name:
+            raise ValueError(f"{cmp_path}: its policy row {row['label']} is not the run "
+                             f"{run.root.name}'s")
+        if under_shipped_before(run.root) or not (run.metrics.is_file() and run.policy.is_file()):
+            raise ValueError(f"{cmp_path}: row {row['label']}: no run directory {run.root} with "
+                             "policy.pt and metrics.json; allowed: a run's policy.pt, not "
+                             "under shipped_before/")
+        metrics = json.loads(run.metrics.read_text())["config"]
+        signals = canonical(metrics["signals"]["names"])
+        if canonical(cmp_cfg["signals"]["names"]) != signals or (
+                float(cmp_cfg["flow"]["kubo"]) != float(metrics["flow"]["kubo"])):
+            raise ValueError(f"{cmp_path}: compared with signals {cmp_cfg['signals']['names']} "
+                             f"at Ku = {cmp_cfg['flow']['kubo']}, its run {run.root} was trained "
+                             f"with {list(signals)} at Ku = {metrics['flow']['kubo']}")
+        curve = read_curves(run.curves) if run.curves.is_file() else {}
+        has_eval = "eval/R_hat" in curve and np.isfinite(curve["eval/R_hat"]).any()
+        files += [run.metrics, run.policy] + ([run.curves] if run.curves.is_file() else [])
+        out.append(AblationRun(
+            signals=signals, seed=int(metrics["seed"]), kubo=float(metrics["flow"]["kubo"]),
+            frames=int(metrics["train"]["total_frames"]),
+            held_out=(int(cmp["n_flows"]), int(cmp["n_swimmers"])),
+            ratio=float(row["ratio_to_first"]), ratio_sem=float(row["ratio_sem"]),
+            smart=float(row["R_hat_mean"]), sto=float(rows[0]["R_hat_mean"]),
+            curve=curve if has_eval else None))
+    return out, {"seed": int(cmp["seed"]), "n_flows": int(cmp["n_flows"])}
+
+
+def read_held_out(ablation: Path, results: Path) -> tuple[list[AblationRun], dict, list[Path]]:
+    """Ablation (a) from held-out comparisons: ``<ablation>/held_out/<run>/comparison.json`` of
+    the run ``<ablation>/<run>/`` and the protocol's at the runs' Ku
+    (``<results>/ku<KU>/comparison.json``: the all-signal runs).
+    Returns the runs, the held-out flows (``{"seed", "n_flows"}``) and the files read.
+
+    Raises ValueError (one line) where they do not form one ablation: runs of different Ku or
+    budgets, comparisons on other flows (seed, number of flows), a signal set and seed twice."""
+    name = RunLayout(ablation).comparison.name
+    found = sorted(Path(ablation, "held_out").glob(f"*/{name}"))
+    runs: list[AblationRun] = []
+    held: list[dict] = []
+    files: list[Path] = []
+    for path in found:
+        r, h = _comparison_runs(path, files, Path(ablation) / path.parent.name)
+        runs += r
+        held.append(h)
+    if runs:
+        protocol = Path(results) / ku_name(runs[0].kubo) / name
+        if protocol.is_file():
+            r, h = _comparison_runs(protocol, files)
+            runs += r
+            held.append(h)
+    for key, values in (("kubo", {r.kubo for r in runs}), ("frames", {r.frames for r in runs}),
+                        ("held-out seed", {h["seed"] for h in held}),
+                        ("held-out n_flows", {h["n_flows"] for h in held})):
+        if len(values) > 1:
+            raise ValueError(f"ablation records under {ablation}: runs differ in {key} "
+                             f"({sorted(values)}); allowed: one value for every run")
+    seen = set()
+    for r in runs:
+        if (r.signals, r.seed) in seen:
+            raise ValueError(f"ablation records under {ablation}: signals {list(r.signals)} "
+                             f"with seed {r.seed} found twice; allowed: one run per set and seed")
+        seen.add((r.signals, r.seed))
+    return runs, (held[0] if held else {}), files
+
+
+def _ablation_derived(rec: dict, evs: list[Evaluation], fits: dict[float, dict],
+                      runs: list[AblationRun], held: dict) -> dict:
+    """The numbers of (a) (per signal set), (b) (per Ku, from the evaluations) and (c)."""
+    summary = summarise_sets(runs) if runs else []
+    keys = ("c1", "c2", "c3", "c4")
+    return {
+        "signal_sets": [{"signals": list(s["signals"]), "seeds": s["seeds"],
+                         "ratios": s["ratios"].tolist(),
+                         "ratio_sems": [r.ratio_sem for r in sorted(
+                             (r for r in runs if r.signals == s["signals"]),
+                             key=lambda r: r.seed)],
+                         "mean": s["mean"], "std": s["std"]} for s in summary],
+        "held_out": held,
+        "minimal": {ev.key: rec["evaluations"][ev.key]["derived"] for ev in evs},
+        "coefficients": {ku_name(k): {c: f["coefficients"][c] for c in keys}
+                         for k, f in fits.items()},
+        "coefficient_errors": {ku_name(k): {c: f.get("flow_sem", f["stderr"])[c] for c in keys}
+                               for k, f in fits.items()},
+    }
+
+
 def build_ablation(cfg: FiguresConfig) -> dict:
-    """Fig. ablation: (a) from the signal-ablation multirun's records, (b), (c) from the
-    committed fits."""
+    """Fig. ablation: (a) from the held-out comparisons of the signal-ablation runs, (b) from
+    the record's evaluations, (c) from the committed fits."""
     fits = read_fits(cfg.fits)
     if not fits:
         return {"pending": f"no ku*/fit.json under {cfg.fits}"}
-    runs = read_ablation(cfg.ablation) if Path(cfg.ablation).is_dir() else []
-    kus = np.array(list(fits))
+    runs, held, files = read_held_out(cfg.ablation, cfg.results)
     names = ("smart", "minimal", "STO")
-    per = []
-    for kubo, fit in fits.items():
-        setup = eval_setup(cfg, kubo, cfg.robust_flows, cfg.robust_swimmers)
-        actors = [smart_policy(cfg, kubo), minimal_name(fit), "sto"]
-        per.append(per_flow_record(cfg, f"minimal_ku{ku_number(kubo)}", setup, actors))
-    r, err = flow_stats(np.stack(per), names)  # per: (Ku, 3, F)
+    evs = [Evaluation(ku_name(k), "sweep",
+                      eval_setup(cfg, k, cfg.robust_flows, cfg.robust_swimmers),
+                      dict(zip(names, (smart_policy(cfg, k), minimal_name(f), "sto"),
+                               strict=True))) for k, f in fits.items()]
+    ratios = (("smart", "STO"), ("minimal", "STO"), ("minimal", "smart"))
+    sources = [*files, *sorted(Path(cfg.fits).glob("ku*/fit.json"))]
+    rec = figure_record(cfg, "ablation", evs, lambda ev: per_flow_values(cfg, ev, ratios),
+                        lambda r: _ablation_derived(r, evs, fits, runs, held), sources)
+    kus = np.array(list(fits))
+    derived = [rec["evaluations"][ev.key]["derived"] for ev in evs]
+    r = {n: np.array([d["mean"][n] for d in derived]) for n in names}
+    err = {n: np.array([d["std"][n] for d in derived]) for n in names}
     keys = ("c1", "c2", "c3", "c4")
     coeffs = {k: np.array([f["coefficients"][k] for f in fits.values()]) for k in keys}
     coeff_err = {k: np.array([f.get("flow_sem", f["stderr"])[k] for f in fits.values()])
                  for k in keys}
-    n_fit = {f["config"]["eval"]["n_flows"] for f in fits.values()}
+    n_fit = sorted({f"{f['config']['eval']['n_flows']} flows x "
+                    f"{f['config']['eval']['n_swimmers']} swimmers" for f in fits.values()})
     if runs:
         counts = sorted(set(Counter(r.signals for r in runs).values()))
         per_set = "-".join(map(str, sorted({counts[0], counts[-1]})))
-        flows, swimmers = runs[0].held_out
-        head = (f"(a) {len(runs)} runs under {shown(cfg.ablation)}, {per_set} seed(s) per set; "
-                f"smart/STO paired on each run's {flows} held-out flows x {swimmers} swimmers, "
-                "bars: std over seeds (one seed: its SEM, open marker)")
+        swimmers = "/".join(map(str, sorted({r.held_out[1] for r in runs})))
+        head = (f"(a) {len(runs)} runs ({shown(cfg.ablation)}, all signals: the protocol's), "
+                f"{per_set} seed(s) per set; smart/STO paired on the same {held['n_flows']} "
+                f"held-out flows (seed {held['seed']}) x {swimmers} swimmers, bars: std over "
+                "seeds (one seed: its SEM, open marker)")
     else:
-        head = f"(a) pending: no records under {shown(cfg.ablation)}"
+        head = f"(a) pending: no held-out comparisons under {shown(cfg.ablation)}/held_out"
+    flows, swimmers = record_sizes(rec, "sweep")
     drawn = fig_ablation(
         kus, r, err, coeffs, coeff_err, cfg.out / "ablation.png",
         f"{head}\n(b) shipped smart policies; the minimal model with the coefficients fitted to "
-        f"them at each Ku; STO; {cfg.robust_flows} flows x {cfg.robust_swimmers} swimmers, "
-        f"bars: std over flows; (c) fits on {'/'.join(map(str, sorted(n_fit)))} flows x 100 "
-        "swimmers, bars: SEM over flows", runs=runs)
+        f"them at each Ku; STO; {flows} flows x {swimmers} swimmers per strategy, bars: std "
+        f"over flows; (c) fits on {', '.join(n_fit)}, bars: SEM over flows", runs=runs,
+        held_out_seed=held.get("seed"))
     if "table" in drawn:
         atomic_write_text(cfg.out / "ablation_signals.md", drawn["table"])
+    drawn["record"] = str(cfg.records / "ablation.json")
     return drawn

@@ -19,6 +19,13 @@ records (``swimrl-figures``).
   standard deviation over independent realisations of each realisation's own ratio (start
   times of one stored run overlap, so their spread would understate it).
 
+No input of the figure may lie under ``shipped_before/`` (the policies shipped before the
+paper-budget runs): where ``dns.*`` names one (:func:`shipped_before_inputs`; the committed
+replay record names ``dns.policy``, and ``docs/results/shipped_before/README.md`` lists the
+replay record and the transfer comparisons as made with those policies), (a), (c), (d), (e)
+are not drawn and the figure is reported ``pending`` with the commands that remake them
+(:data:`REMAKE`); (b) and (f) are drawn.
+
 The replay record (``record``) is made once from a finished stored run when that run exists
 (``swimrl-dns seed=...``; the stores are too large to commit) and is then read from the
 committed ``.npz``: a fresh clone draws the figure and the videos without the store. The
@@ -47,13 +54,47 @@ from swimrl.flows.dns.store import store_status
 from swimrl.policies.baselines import StrategyLabel
 from swimrl.policies.files import RunLayout, resolve_policy_file
 
-from .records import FRAME_EVERY, DNSFiguresConfig, FiguresConfig, record_strategies
+from .records import (
+    FRAME_EVERY,
+    DNSFiguresConfig,
+    FiguresConfig,
+    portable,
+    record_strategies,
+    under_shipped_before,
+)
 from .style import COLORS, LABEL, save
 
 #: Largest aspect ratio drawn for a glyph (the swimmers' own reach ~10 at |Lambda| = 0.98).
 GLYPH_ASPECT_MAX = 4.0
 #: The paper's colours of Fig. dnsFlow(b).
 PDF_COLOURS = {"omega": "tab:blue", "S_xx": "tab:green", "S_xy": "tab:red"}
+
+
+#: How the DNS records are remade with the current policies (``{store}``, ``{record}``,
+#: ``{transfer}``: the ``dns.*`` paths).
+REMAKE = ("swimrl-dns seed=2 (the held-out store {store}; docs/dns.md), then rm {record} and "
+          "swimrl-figures only=dnsFlow dns.policy=pretrained/ku10 (and dns.policy=pretrained/ku10 "
+          "in conf/figures.yaml); the transfer: swimrl-dns -m seed=3,4,5 and the swimrl-compare "
+          "loop of docs/results.md, Fig. dnsFlow, into {transfer}/seed<s>")
+
+
+def shipped_before_inputs(dns: DNSFiguresConfig) -> list[str]:
+    """The ``dns.*`` inputs under ``shipped_before/`` (``KEY=VALUE``)."""
+    keys = ("policy", "trained", "store", "record", "transfer", "checks", "curve")
+    return [f"dns.{k}={getattr(dns, k)}" for k in keys
+            if getattr(dns, k) is not None and under_shipped_before(getattr(dns, k))]
+
+
+def shipped_before_pending(dns: DNSFiguresConfig) -> str:
+    """Why the DNS records are not drawn and how to remake them ("" where no input is under
+    ``shipped_before/``)."""
+    inputs = shipped_before_inputs(dns)
+    if not inputs:
+        return ""
+    return (f"{', '.join(inputs)} under shipped_before/: the replay record and the transfer "
+            "comparisons were made with the earlier policies; remake them: "
+            + REMAKE.format(store=portable(dns.store), record=portable(dns.record),
+                            transfer=portable(dns.transfer)))
 
 
 def spheroid_aspect(shape_factor: np.ndarray) -> np.ndarray:
@@ -351,13 +392,15 @@ def build_dns_flow(cfg: FiguresConfig) -> dict:
     if cfg.dns is None:
         return {"pending": "no dns.* records configured"}
     dns = cfg.dns
-    rec, why = dns_record(cfg, dns)
+    stale = shipped_before_pending(dns)
+    rec, why = (None, f"(a), (c), (d), (e): {stale}") if stale else dns_record(cfg, dns)
     pdfs = None
     if Path(dns.checks).exists():
         pdfs = json.loads(Path(dns.checks).read_text()).get("pooled_pdfs")
-    per = read_transfer(dns.transfer) if Path(dns.transfer).exists() else {}
+    per = read_transfer(dns.transfer) if Path(dns.transfer).exists() and not stale else {}
     summary = transfer_summary(per) if per else None
-    title = "no replay record"
+    title = ("(a), (c), (d), (e) pending: the DNS records were made with the policies under "
+             "shipped_before/" if stale else "no replay record")
     if rec is not None:
         title = (f"(a) held-out DNS run {rec['input_store']}, smart = {rec['input_policy']}; "
                  f"(c) smart = the shipped policies, minimal = fits to them; (d, e) "
@@ -368,9 +411,11 @@ def build_dns_flow(cfg: FiguresConfig) -> dict:
     if summary:
         out["transfer"] = summary
         atomic_write_text(cfg.out / "dnsFlow_transfer.md", transfer_markdown(summary))
+    elif stale:
+        atomic_write_text(cfg.out / "dnsFlow_transfer.md", f"Pending: {stale}\n")
     missing = [why] if why else []
     missing += [f"no pooled_pdfs in {dns.checks}"] if not pdfs else []
-    missing += [f"no comparison.json under {dns.transfer}"] if not summary else []
+    missing += [f"no comparison.json under {dns.transfer}"] if not (summary or stale) else []
     if missing:
         out["pending"] = "; ".join(missing)
     return out

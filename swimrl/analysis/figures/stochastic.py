@@ -12,18 +12,24 @@ import numpy as np
 from swimrl.analysis.performance import load, summarise
 from swimrl.analysis.plots import pyplot
 from swimrl.evaluation.rollout import EvalSizes
-from swimrl.flows.labels import ku_display
+from swimrl.flows.labels import ku_display, ku_name
 from swimrl.policies.baselines import StrategyLabel
+from swimrl.policies.files import RunLayout
 
 from .records import (
     KUS,
     RECORD_STRATEGIES,
+    Evaluation,
     FiguresConfig,
     cache_inputs,
     cached,
     eval_setup,
+    figure_record,
+    flow_summary,
     flow_vorticity,
+    ku_evaluation,
     ku_record,
+    record_sizes,
     record_strategies,
 )
 from .style import COLORS, save, sizes_title
@@ -130,10 +136,44 @@ def fig_smart_performance(summaries: list[dict], finals: dict[float, np.ndarray]
     return out
 
 
+def _ku_values(cfg: FiguresConfig, ev: Evaluation) -> dict:
+    """A Ku record's entry of smartPerformance's record: per-flow R_hat, and each strategy's
+    mean distance from the start at T (``mean_distance``, l_f)."""
+    d = ku_record(cfg, ev.kubo)
+    per = {n: d["per_flow"][j].tolist() for j, n in enumerate(ev.actors)}
+    dist = np.linalg.norm(d["final"], axis=-1).mean(axis=1)
+    return {"per_flow": per,
+            "derived": {**flow_summary(per, [("smart", "STO"), ("smart", "naive")]),
+                        "mean_distance": {n: float(dist[j]) for j, n in enumerate(ev.actors)}}}
+
+
+def protocol_summary(summaries: list[dict]) -> dict:
+    """The numbers of (a) per Ku, from the protocol's comparisons (:func:`summarise`)."""
+    out = {}
+    for s in summaries:
+        out[ku_name(s["kubo"])] = {
+            "n_flows": s["n_flows"], "n_swimmers": s["n_swimmers"], "seed": s["seed"],
+            **{name: {"mean": s[key]["R_hat_mean"], "std": s[key]["R_hat_std"]}
+               for key, name in (("naive", "naive"), ("sto", "STO"))},
+            "smart_seeds": [{"label": x["label"], "mean": x["R_hat_mean"], "std": x["R_hat_std"],
+                             "smart/STO": list(x["vs_sto"])} for x in s["seeds"]],
+            "smart_mean": s["smart_mean"], "smart_seed_std": s["smart_seed_std"]}
+    return out
+
+
 def build_smart_performance(cfg: FiguresConfig) -> dict:
+    """(a) from the protocol's comparisons (``results``), (b-e) from the Ku records; the
+    numbers of both in ``<records>/smartPerformance.json``."""
+    files = sorted(Path(cfg.results).rglob(RunLayout(cfg.results).comparison.name))
     summaries = [summarise(r) for r in load([cfg.results])]
+    evs = [ku_evaluation(cfg, k) for k in KUS]
+    rec = figure_record(cfg, "smartPerformance", evs, lambda ev: _ku_values(cfg, ev),
+                        lambda r: {"protocol": protocol_summary(summaries)}, sources=files)
     finals = {k: ku_record(cfg, k)["final"] for k in KUS}
-    return fig_smart_performance(
+    flows, swimmers = record_sizes(rec, "trajectories")
+    out = fig_smart_performance(
         summaries, finals, cfg.out / "smartPerformance.png",
-        f"(b-e): final positions, {sizes_title(cfg.n_flows, cfg.n_swimmers, cfg.params)} "
+        f"(b-e): final positions, {sizes_title(flows, swimmers, rec['params']['duration'])} "
         "per strategy, shipped policies")
+    out["record"] = str(cfg.records / "smartPerformance.json")
+    return out

@@ -10,7 +10,6 @@ from __future__ import annotations
 from pathlib import Path
 
 from swimrl.analysis.plots import pyplot
-from swimrl.env import EnvParams
 
 COLORS = {"smart": "tab:orange", "naive": "k", "STO": "tab:green"}
 LABEL = {"n_r": r"$n_r$", "n_theta": r"$n_\theta$", "S_nn": r"$S_{nn}\tau_K$",
@@ -25,9 +24,9 @@ def save(fig, path: Path) -> None:
     pyplot().close(fig)
 
 
-def sizes_title(flows: int, swimmers: int, params: EnvParams) -> str:
-    """The sizes of an evaluation as a title says them."""
-    return f"{flows} flow(s) x {swimmers} swimmers, T = {params.duration:g} $\\tau_K$"
+def sizes_title(flows: int, swimmers: int, duration: float) -> str:
+    """The sizes of an evaluation as a title says them (``duration``: ``T / tau_K``)."""
+    return f"{flows} flow(s) x {swimmers} swimmers, T = {float(duration):g} $\\tau_K$"
 
 
 def shown(path: Path) -> str:

@@ -20,7 +20,7 @@ import numpy as np
 from swimrl.analysis.plots import pyplot
 from swimrl.flows.labels import flow_display, ku_name
 
-from .dns import dns_record
+from .dns import dns_record, shipped_before_pending
 from .records import KUS, RECORD_STRATEGIES, FiguresConfig, ku_record
 from .style import COLORS
 
@@ -142,8 +142,12 @@ def build_videos(cfg: FiguresConfig) -> dict:
         rec = ku_record(cfg, kubo)
         out[i + 1] = video_trajectories(rec, kubo, where / f"video{i + 1}_{ku_name(kubo)}.mp4")
         out[i + 6] = video_cloud(rec, kubo, where / f"video{i + 6}_{ku_name(kubo)}_cloud.mp4")
-    rec, why = (None, "no dns.* records configured") if cfg.dns is None else dns_record(cfg,
-                                                                                      cfg.dns)
+    if cfg.dns is None:
+        rec, why = None, "no dns.* records configured"
+    elif stale := shipped_before_pending(cfg.dns):
+        rec, why = None, stale
+    else:
+        rec, why = dns_record(cfg, cfg.dns)
     if rec is None:
         out["pending"] = f"videos 5, 10: {why}"
     else:

@@ -1,0 +1,215 @@
+"""Figure records (swimrl.analysis.figures.records): a missing record is computed and written,
+read back equal; a record made for other sizes, seeds or policy files, of another format, or
+with mixed sizes inside it is refused in one line; ``figures.refresh`` remakes it. Tiny
+evaluations (64^2 grid, T = 1, a few swimmers)."""
+
+from __future__ import annotations
+
+import json
+import shutil
+from dataclasses import replace
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from swimrl.analysis.figures import mechanism, records, robustness
+from swimrl.config import figures_config
+from swimrl.errors import BadFileError, ConfigError
+from swimrl.policies.files import PRETRAINED_ROOT
+
+TINY = ["progress=false", "threads=1", "episode.duration=1.0", "flow.n_grid=64",
+        "flow.spacing=0.1", "figures.robust_flows=2", "figures.robust_swimmers=3",
+        "figures.noise=[0.0,0.01]", "figures.map_flows=2", "figures.map_swimmers=3",
+        "figures.map_seeds=[0,1]"]
+
+
+@pytest.fixture
+def tiny(compose_cfg, tmp_path):
+    """``make(*overrides)``: the figures' config at tiny sizes, its policies copies of the
+    shipped ones (``<tmp>/policies/ku*``, ``<tmp>/runs/ku*_seed*``), everything written under
+    ``tmp_path``."""
+    for name in ("ku10", "ku1e7"):
+        shutil.copytree(PRETRAINED_ROOT / name, tmp_path / "policies" / name)
+        for seed in (0, 1):
+            shutil.copytree(PRETRAINED_ROOT / name, tmp_path / "runs" / f"{name}_seed{seed}")
+
+    def make(*overrides: str) -> records.FiguresConfig:
+        cfg = figures_config(compose_cfg([*TINY, *overrides], name="figures"))
+        return replace(cfg, out=tmp_path / "fig", cache=tmp_path / "cache",
+                       records=tmp_path / "records", policies=str(tmp_path / "policies"),
+                       curves=tmp_path / "runs")
+
+    return make
+
+
+def _refused(error, match: str, build, cfg) -> str:
+    with pytest.raises(error, match=match) as err:
+        build(cfg)
+    text = str(err.value)
+    assert "\n" not in text
+    return text
+
+
+def test_missing_record_is_computed_written_and_read_back_equal(tiny):
+    cfg = tiny()
+    path = cfg.records / "robustness-noise.json"
+    assert not path.exists()
+    drawn = robustness.build_robustness_noise(cfg)
+    rec = records.read_figure_record(path)
+    assert rec["format"] == records.RECORD_FORMAT and rec["figure"] == "robustness-noise"
+    assert rec["sizes"] == {"sweep": {"n_flows": 2, "n_swimmers": 3, "flows_per_batch": 2}}
+    assert list(rec["evaluations"]) == ["rot_diffusion=0", "rot_diffusion=0.01"]
+    ev = rec["evaluations"]["rot_diffusion=0.01"]
+    assert ev["setup"]["changed"] == {"rot_diffusion": 0.01} and ev["setup"]["seed"] == 0
+    assert ev["setup"]["flow"]["kubo"] == 10.0
+    policy = str(Path(cfg.policies) / "ku10")
+    assert ev["actors"] == {"smart": policy, "naive": "naive", "STO": "sto"}
+    assert ev["files"] == {policy: records.sha256_file(Path(policy) / "policy.pt")}
+    assert all(len(v) == 2 for v in ev["per_flow"].values())
+    want = records.flow_summary(ev["per_flow"], [("smart", "STO")])
+    assert ev["derived"]["mean"] == pytest.approx(want["mean"])
+    assert ev["derived"]["ratio"]["smart/STO"]["value"] == pytest.approx(
+        np.mean(ev["per_flow"]["smart"]) / np.mean(ev["per_flow"]["STO"]))
+    assert rec["derived"]["rot_diffusion"]["x"] == [0.0, 0.01]
+    assert drawn["ratio"] == pytest.approx(rec["derived"]["rot_diffusion"]["smart/STO"])
+    # read, not remade: the same record (nothing evaluated: the cache is gone too)
+    text = path.read_text()
+    shutil.rmtree(cfg.cache)
+    again = records.figure_record(cfg, "robustness-noise",
+                                  robustness.sweep_evaluations(cfg, "rot_diffusion", cfg.noise),
+                                  lambda ev: pytest.fail("recomputed"))
+    assert again == json.loads(text) == rec and path.read_text() == text
+
+
+def test_record_made_for_other_sizes_seed_or_policy_is_refused(tiny):
+    cfg = tiny()
+    robustness.build_robustness_noise(cfg)
+    path = cfg.records / "robustness-noise.json"
+    text = path.read_text()
+    msg = _refused(ConfigError, "sizes.sweep.n_flows = 2 in the record, 3 now",
+                   robustness.build_robustness_noise, tiny("figures.robust_flows=3"))
+    assert str(path) in msg and "figures.refresh=[robustness-noise]" in msg
+    _refused(ConfigError, "seed = 0 in the record, 5 now", robustness.build_robustness_noise,
+             tiny("seed=5"))
+    _refused(ConfigError, r"evaluations = \[.*\] in the record", robustness.build_robustness_noise,
+             tiny("figures.noise=[0.0,0.1]"))
+    policy = Path(cfg.policies) / "ku10" / "policy.pt"
+    old = records.sha256_file(policy)
+    policy.write_bytes(policy.read_bytes() + b"\0")  # other bytes: a stale hash
+    msg = _refused(ConfigError, r"evaluations.rot_diffusion=0.files.",
+                   robustness.build_robustness_noise, cfg)
+    assert old in msg and records.sha256_file(policy) in msg
+    assert path.read_text() == text  # never replaced
+
+
+def test_mixed_sizes_or_another_format_in_a_record_are_refused(tiny):
+    cfg = tiny()
+    robustness.build_robustness_noise(cfg)
+    path = cfg.records / "robustness-noise.json"
+    good = json.loads(path.read_text())
+
+    def write(edit) -> None:
+        rec = json.loads(json.dumps(good))
+        edit(rec)
+        path.write_text(json.dumps(rec))
+
+    def more_flows(rec):
+        ev = rec["evaluations"]["rot_diffusion=0.01"]
+        ev["setup"]["n_flows"] = 3
+        ev["per_flow"] = {k: v + v[:1] for k, v in ev["per_flow"].items()}
+
+    write(more_flows)
+    _refused(BadFileError, r"rot_diffusion=0.01.setup.n_flows = 3 but sizes.sweep.n_flows = 2: "
+             "mixed sizes", robustness.build_robustness_noise, cfg)
+    write(lambda rec: rec["evaluations"]["rot_diffusion=0"]["per_flow"]["STO"].pop())
+    _refused(BadFileError, "per_flow.STO holds 1 flows", robustness.build_robustness_noise, cfg)
+    write(lambda rec: rec.update(format=0))
+    _refused(ConfigError, "format = 0 in the record, 1 now", robustness.build_robustness_noise,
+             cfg)
+    path.write_text("{")
+    _refused(BadFileError, "not a readable figure record", robustness.build_robustness_noise,
+             cfg)
+
+
+def test_refresh_remakes_the_record(tiny):
+    cfg = tiny()
+    robustness.build_robustness_noise(cfg)
+    path = cfg.records / "robustness-noise.json"
+    made = json.loads(path.read_text())
+    tampered = json.loads(json.dumps(made))
+    tampered["evaluations"]["rot_diffusion=0"]["per_flow"]["smart"] = [9.0, 9.0]
+    path.write_text(json.dumps(tampered))
+    robustness.build_robustness_noise(tiny("figures.refresh=[robustness-noise]"))
+    assert json.loads(path.read_text()) == made  # remade from the cache, as computed
+    bigger = tiny("figures.refresh=[robustness-noise]", "figures.robust_swimmers=4")
+    robustness.build_robustness_noise(bigger)
+    assert json.loads(path.read_text())["sizes"]["sweep"]["n_swimmers"] == 4
+    robustness.build_robustness_noise(tiny("figures.robust_swimmers=4"))  # read as made
+    with pytest.raises(ConfigError, match="figures.refresh"):
+        tiny("figures.refresh=[swimmer]")  # a figure without a record
+
+
+def test_mechanism_records_hold_per_seed_statistics(tiny):
+    """kuInf: every decision of each seed's run streamed into its statistics; the record
+    holds per seed the per-flow R_hat, the counts and the S_nn statistic, and the figure
+    draws the first seed's maps."""
+    cfg = tiny()
+    out = mechanism.build_ku_inf(cfg)
+    rec = records.read_figure_record(cfg.records / "kuInf.json")
+    assert rec["sizes"] == {"statistics": {"n_flows": 2, "n_swimmers": 3, "flows_per_batch": 2}}
+    assert list(rec["evaluations"]) == ["ku1e7_seed0", "ku1e7_seed1"]
+    ev = rec["evaluations"]["ku1e7_seed1"]
+    run = cfg.curves / "ku1e7_seed1" / "policy.pt"
+    assert ev["actors"] == {"smart": str(run)}
+    assert ev["files"] == {str(run): records.sha256_file(run)}
+    assert ev["counts"] == {"trajectories": 6, "decisions": 60}
+    assert ev["derived"]["snn"]["n"] == 60 and len(ev["per_flow"]["smart"]) == 2
+    seeds = rec["derived"]["per_seed"]
+    assert seeds["1"]["p_pos_given_low"] == ev["derived"]["snn"]["p_pos_given_low"]
+    arrays = mechanism.map_record(cfg, mechanism.map_evaluation(cfg, 1e7, 0))
+    assert out["snn"] == mechanism.snn_statistic(arrays)
+    assert arrays["map_omega_count"].sum() <= 60 and arrays["sample_Lambda"].size > 0
+    assert (cfg.out / "kuInf.png").stat().st_size > 1000
+
+
+REPO = Path(__file__).resolve().parent.parent
+
+
+def test_every_record_at_tiny_sizes_and_no_input_under_shipped_before(tiny, monkeypatch,
+                                                                    tmp_path):
+    """Each figure with a record makes it from the committed inputs (the protocol's
+    comparisons, the ablation's held-out comparisons, the fits) and the shipped policies;
+    no record names a file under shipped_before/; dnsFlow, whose committed DNS records were
+    made with the earlier policies, is pending with the commands that remake them."""
+    from swimrl.analysis.figures.build import build_figures
+
+    monkeypatch.chdir(REPO)  # the comparisons name their policies from the repository root
+    for name in ("ku0.1", "ku1"):
+        shutil.copytree(PRETRAINED_ROOT / name, tmp_path / "policies" / name)
+        for seed in (0, 1):
+            shutil.copytree(PRETRAINED_ROOT / name, tmp_path / "runs" / f"{name}_seed{seed}")
+    cfg = tiny("figures.n_flows=1", "figures.n_swimmers=3", "figures.n_traj=2",
+               "figures.durations=[0.5,1.0]", "figures.update_intervals=[0.1,0.2]",
+               "figures.swim_speeds=[0.707]")
+    built = {}
+    for name in records.RECORDED:
+        built.update(build_figures(replace(cfg, only=name), log=lambda _: None))
+    assert not any("pending" in v for v in built.values())
+    for name in records.RECORDED:
+        rec = records.read_figure_record(cfg.records / f"{name}.json")
+        named = [*rec["sources"], *(f for e in rec["evaluations"].values() for f in e["files"])]
+        assert not [f for f in named if records.under_shipped_before(f)], name
+    ablation = json.loads((cfg.records / "ablation.json").read_text())
+    sets = {tuple(s["signals"]): s for s in ablation["derived"]["signal_sets"]}
+    assert sets[("n_theta", "S_np")]["seeds"] == [0, 1, 2]
+    assert len(sets[("n_r", "n_theta", "S_nn", "S_np", "omega")]["seeds"]) == 3
+    assert ablation["derived"]["held_out"] == {"seed": 0, "n_flows": 100}
+    assert any(s.startswith("docs/results/ablation_1e8/held_out/") for s in ablation["sources"])
+    perf = json.loads((cfg.records / "smartPerformance.json").read_text())
+    assert perf["derived"]["protocol"]["ku10"]["n_flows"] == 100
+    pattern = json.loads((cfg.records / "ku_pattern.json").read_text())
+    assert set(pattern["derived"]["ku10"]["map_correlation"]) == {"n_theta", "omega"}
+    dns = build_figures(replace(cfg, only="dnsFlow"), log=lambda _: None)["dnsFlow"]
+    assert "shipped_before" in dns["pending"] and "swimrl-dns seed=2" in dns["pending"]
+    assert "a" not in dns and "c" not in dns
