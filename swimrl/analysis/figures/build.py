@@ -6,6 +6,7 @@ import time
 from collections.abc import Callable
 
 from .ablation import build_ablation
+from .beyond import build_beyond_energy, build_beyond_target
 from .dns import build_dns_flow
 from .mechanism import build_ku01, build_ku_inf, build_ku_pattern
 from .records import FiguresConfig
@@ -27,6 +28,8 @@ BUILDERS: dict[str, Callable[[FiguresConfig], dict]] = {
     "robustness": build_robustness,
     "dnsFlow": build_dns_flow,
     "videos": build_videos,
+    "beyondTarget": build_beyond_target,
+    "beyondEnergy": build_beyond_energy,
 }
 
 

@@ -71,7 +71,8 @@ from swimrl.runtime import Runtime
 
 #: The figures, in build order (the keys of :data:`swimrl.analysis.figures.build.BUILDERS`).
 FIGURES = ("swimmer", "smartPerformance", "ku0.1", "kuInf", "ku_pattern", "trainingCurves",
-           "ablation", "robustness-noise", "robustness", "dnsFlow", "videos")
+           "ablation", "robustness-noise", "robustness", "dnsFlow", "videos", "beyondTarget",
+           "beyondEnergy")
 #: The figures that keep a record ``<records>/<figure>.json`` (:func:`figure_record`).
 RECORDED = ("smartPerformance", "ku0.1", "kuInf", "ku_pattern", "ablation", "robustness-noise",
             "robustness")
@@ -195,6 +196,9 @@ class FiguresConfig:
     ``held_out/<run>/comparison.json`` (ablation (a))."""
     dns: DNSFiguresConfig | None
     """Records of Fig. dnsFlow and videos 5, 10 (None: not drawn)."""
+    beyond: Path
+    """Comparisons of the tasks beyond the paper (``target/ku<KU>_D<D>/``, ``energy/ku<KU>/``;
+    :mod:`.beyond`)."""
     progress: bool
 
     def __post_init__(self) -> None:

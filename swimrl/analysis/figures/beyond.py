@@ -1,0 +1,227 @@
+"""Beyond the paper (``docs/results.md``, "Beyond the paper"): point-to-point navigation
+(``beyondTarget``) and the energy cost of shape (``beyondEnergy``), drawn from the
+``comparison.json`` records of ``swimrl-compare`` under ``<beyond>/`` (``figures.beyond``):
+
+* ``target/ku<KU>_D<D>/comparison.json`` (``task=target``, one per Ku and target distance
+  ``D``): arrival probability within ``T`` and median arrival time against ``D`` for target-STO,
+  the best constant shape, the displacement-trained policy used as it is and the target-trained
+  policies (one point per seed);
+* ``energy/ku<KU>/comparison.json`` (``task=displacement``): ``R_hat`` against the energy
+  ``E_hat`` per swimmer (:mod:`swimrl.physics.energy`) of every row, the policies coloured by
+  the ``reward.energy_weight`` they were trained with (read from their run directory,
+  ``..._w<W>_seed<k>``; the protocol's runs are ``w = 0``), and the non-dominated front
+  (:func:`pareto_front`).
+
+A figure whose records are missing is reported ``pending`` with the command that makes them.
+"""
+
+from __future__ import annotations
+
+import json
+import re
+from pathlib import Path
+
+import numpy as np
+
+from swimrl.analysis.plots import pyplot
+from swimrl.flows.labels import ku_display, parse_ku_name
+from swimrl.policies.baselines import StrategyLabel
+
+from .records import FiguresConfig
+from .style import COLORS, save, shown
+
+_TARGET_DIR = re.compile(r"ku(?P<ku>[^_]+)_D(?P<d>[0-9.]+)")
+_WEIGHT = re.compile(r"_w(?P<w>[0-9.eE+-]+)_seed(?P<seed>\d+)")
+#: The row kinds of a target comparison, as drawn (colour, marker).
+TARGET_KINDS = {"target-STO": (COLORS["STO"], "s"), "best naive": (COLORS["naive"], "v"),
+                "displacement policy": ("tab:blue", "D"), "smart (target)": (COLORS["smart"], "o")}
+
+
+def pareto_front(r_hat: np.ndarray, energy: np.ndarray) -> np.ndarray:
+    """Indices of the non-dominated points (no other point has ``R_hat >=`` and ``E_hat <=``
+    with one of them strict), in increasing ``E_hat``."""
+    r, e = np.asarray(r_hat, float), np.asarray(energy, float)
+    keep = [i for i in range(r.size)
+            if not np.any((r >= r[i]) & (e <= e[i]) & ((r > r[i]) | (e < e[i])))]
+    return np.asarray(sorted(keep, key=lambda i: (e[i], -r[i])), dtype=int)
+
+
+def row_kind(label: str) -> str | None:
+    """What a target comparison's row is: ``target-STO``, a constant shape
+    (``naive``), the displacement policy (``pretrained/ku*``) or a target-trained policy."""
+    parsed = StrategyLabel.parse(label)
+    if parsed.name == "sto":
+        return "target-STO"
+    if parsed.name == "naive":
+        return "naive"
+    if parsed.name == "policy":
+        return "displacement policy" if "pretrained/" in parsed.arg else "smart (target)"
+    return None
+
+
+def read_target(root: Path) -> dict[float, dict[float, dict]]:
+    """``{Ku: {D: comparison record}}`` from ``root/target/ku*_D*/comparison.json``."""
+    out: dict[float, dict[float, dict]] = {}
+    for path in sorted(Path(root).glob("target/ku*_D*/comparison.json")):
+        m = _TARGET_DIR.fullmatch(path.parent.name)
+        ku = parse_ku_name(f"ku{m.group('ku')}") if m else None
+        if ku is None:
+            continue
+        rec = json.loads(path.read_text())
+        if rec.get("task") != "target":
+            raise ValueError(f"{path}: not a task=target comparison")
+        out.setdefault(ku, {})[float(rec["target_distance"])] = rec
+    return {k: dict(sorted(v.items())) for k, v in sorted(out.items())}
+
+
+def target_summary(rec: dict) -> dict[str, dict]:
+    """Per row kind: arrival probability (mean, SEM), median arrival time; the best constant
+    shape (highest arrival) stands for ``naive``; target-trained policies per seed
+    (``values``) and their mean."""
+    out: dict[str, dict] = {}
+    naive = [r for r in rec["rows"] if row_kind(r["label"]) == "naive"]
+    if naive:
+        best = max(naive, key=lambda r: r["arrival_mean"])
+        out["best naive"] = {"label": best["label"], **_arrival(best)}
+    for r in rec["rows"]:
+        kind = row_kind(r["label"])
+        if kind in ("target-STO", "displacement policy"):
+            out[kind] = {"label": r["label"], **_arrival(r)}
+    smart = [r for r in rec["rows"] if row_kind(r["label"]) == "smart (target)"]
+    if smart:
+        values = [_arrival(r) for r in smart]
+        out["smart (target)"] = {
+            "label": "; ".join(r["label"] for r in smart), "values": values,
+            "arrival": float(np.mean([v["arrival"] for v in values])),
+            "sem": float(np.std([v["arrival"] for v in values], ddof=1)) if len(values) > 1
+            else values[0]["sem"],
+            "median_time": _nanmean([v["median_time"] for v in values])}
+    return out
+
+
+def _arrival(row: dict) -> dict:
+    t = row.get("arrival_time_median")
+    return {"arrival": float(row["arrival_mean"]), "sem": float(row["arrival_sem"]),
+            "median_time": float("nan") if t is None else float(t)}
+
+
+def _nanmean(values) -> float:
+    v = np.asarray(values, float)
+    return float(np.nanmean(v)) if np.isfinite(v).any() else float("nan")
+
+
+def build_beyond_target(cfg: FiguresConfig) -> dict:
+    """Fig. beyondTarget: arrival probability (top) and median arrival time (bottom) against
+    the target distance, one column per Ku; a table ``beyondTarget.md`` beside it."""
+    recs = read_target(cfg.beyond)
+    if not recs:
+        return {"pending": f"no target/ku*_D*/comparison.json under {shown(cfg.beyond)} "
+                           f"(commands: {shown(cfg.beyond)}/README.md)"}
+    plt = pyplot()
+    fig, axes = plt.subplots(2, len(recs), figsize=(4.2 * len(recs), 6.2), squeeze=False)
+    lines, data = [], {}
+    for col, (ku, by_d) in enumerate(recs.items()):
+        d = np.asarray(list(by_d))
+        summary = {dist: target_summary(rec) for dist, rec in by_d.items()}
+        data[ku] = {str(k): v for k, v in summary.items()}
+        for kind, (color, marker) in TARGET_KINDS.items():
+            present = [dist for dist in d if kind in summary[dist]]
+            if not present:
+                continue
+            y = [summary[x][kind]["arrival"] for x in present]
+            err = [summary[x][kind]["sem"] for x in present]
+            t = [summary[x][kind]["median_time"] for x in present]
+            axes[0, col].errorbar(present, y, yerr=err, color=color, marker=marker, capsize=3,
+                                  label=kind)
+            axes[1, col].plot(present, t, color=color, marker=marker, label=kind)
+            if kind == "smart (target)":
+                for x in present:
+                    seeds = [v["arrival"] for v in summary[x][kind]["values"]]
+                    axes[0, col].plot([x] * len(seeds), seeds, ".", color=color, alpha=0.5)
+        rec0 = next(iter(by_d.values()))
+        axes[0, col].set_title(f"{ku_display(ku)}: {rec0['n_flows']} flows x "
+                               f"{rec0['n_swimmers']} swimmers, seed {rec0['seed']}", fontsize=9)
+        axes[0, col].set_ylabel("arrived within T")
+        axes[0, col].set_ylim(0, 1.02)
+        axes[1, col].set_ylabel(r"median arrival time / $\tau_K$")
+        axes[1, col].set_xlabel(r"target distance $D/\ell_f$")
+        axes[0, col].legend(fontsize=7)
+        for dist in d:
+            for kind, s in summary[dist].items():
+                lines.append(f"| {ku_display(ku)} | {dist:g} | {kind} | {s['arrival']:.3f} ± "
+                             f"{s['sem']:.3f} | {s['median_time']:.1f} | {s['label']} |")
+    fig.tight_layout()
+    path = Path(cfg.out) / "beyondTarget.png"
+    save(fig, path)
+    table = ("| Ku | D / ℓ_f | strategy | arrived within T (± SEM; smart: ± std over seeds) | "
+             "median arrival time / τ_K | rows |\n|---|---|---|---|---|---|\n"
+             + "\n".join(lines) + "\n")
+    (Path(cfg.out) / "beyondTarget.md").write_text(table)
+    return {"path": str(path), "summary": data}
+
+
+def read_energy(root: Path) -> dict[float, dict]:
+    """``{Ku: comparison record}`` from ``root/energy/ku*/comparison.json``."""
+    out = {}
+    for path in sorted(Path(root).glob("energy/ku*/comparison.json")):
+        ku = parse_ku_name(path.parent.name)
+        if ku is not None:
+            out[ku] = json.loads(path.read_text())
+    return dict(sorted(out.items()))
+
+
+def energy_weight(label: str) -> float | None:
+    """The ``reward.energy_weight`` a policy row was trained with: ``_w<W>_seed<k>`` in its
+    path, 0 for the protocol's runs (``paper_runs``, ``pretrained``); None for baselines."""
+    parsed = StrategyLabel.parse(label)
+    if parsed.name != "policy":
+        return None
+    m = _WEIGHT.search(parsed.arg)
+    return float(m.group("w")) if m else 0.0
+
+
+def build_beyond_energy(cfg: FiguresConfig) -> dict:
+    """Fig. beyondEnergy: ``R_hat`` against ``E_hat`` (± SEM over flows) for every row of
+    each Ku's comparison, the constant shapes as a line, the non-dominated front dashed."""
+    recs = read_energy(cfg.beyond)
+    if not recs:
+        return {"pending": f"no energy/ku*/comparison.json under {shown(cfg.beyond)} "
+                           f"(commands: {shown(cfg.beyond)}/README.md)"}
+    plt = pyplot()
+    fig, axes = plt.subplots(1, len(recs), figsize=(4.6 * len(recs), 3.9), squeeze=False)
+    cmap = plt.get_cmap("autumn_r")
+    out = {}
+    for a, (ku, rec) in zip(axes[0], recs.items(), strict=True):
+        rows = rec["rows"]
+        r = np.asarray([x["R_hat_mean"] for x in rows])
+        e = np.asarray([x["energy_mean"] for x in rows])
+        weights = [energy_weight(x["label"]) for x in rows]
+        w_max = max([w for w in weights if w is not None] or [1.0]) or 1.0
+        naive = [i for i, x in enumerate(rows) if StrategyLabel.parse(x["label"]).name == "naive"]
+        if naive:
+            order = sorted(naive, key=lambda i: e[i])
+            a.plot(e[order], r[order], "-", color=COLORS["naive"], lw=0.8, marker=".",
+                   label="constant Λ")
+        for i, x in enumerate(rows):
+            w = weights[i]
+            if StrategyLabel.parse(x["label"]).name == "sto":
+                a.errorbar(e[i], r[i], xerr=x["energy_sem"], yerr=x["R_hat_sem"], marker="s",
+                           color=COLORS["STO"], label="STO", capsize=2)
+            elif w is not None:
+                a.errorbar(e[i], r[i], xerr=x["energy_sem"], yerr=x["R_hat_sem"], marker="o",
+                           color=cmap(0.25 + 0.75 * w / w_max), capsize=2, ms=5,
+                           label=f"smart, w = {w:g}")
+        front = pareto_front(r, e)
+        a.plot(e[front], r[front], "--", color="0.5", lw=0.8, zorder=0, label="front")
+        handles, labels = a.get_legend_handles_labels()
+        unique = dict(zip(labels, handles, strict=True))
+        a.legend(unique.values(), unique.keys(), fontsize=6)
+        a.set_xlabel(r"$\hat E$ (work against drag / $6\pi\mu a v_s^2 T$)")
+        a.set_ylabel(r"$\hat R$")
+        a.set_title(f"{ku_display(ku)}: {rec['n_flows']} flows x {rec['n_swimmers']} swimmers,"
+                    f" seed {rec['seed']}", fontsize=9)
+        out[ku] = {"front": [rows[i]["label"] for i in front]}
+    fig.tight_layout()
+    path = Path(cfg.out) / "beyondEnergy.png"
+    save(fig, path)
+    return {"path": str(path), **{str(k): v for k, v in out.items()}}

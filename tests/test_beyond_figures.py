@@ -1,0 +1,86 @@
+"""Figures beyond the paper (swimrl.analysis.figures.beyond): the Pareto front, and both
+figures drawn from tiny ``swimrl-compare`` records (``task=target`` at two distances; the
+displacement task with energies), or reported pending without them."""
+
+from __future__ import annotations
+
+import json
+import shutil
+from dataclasses import replace
+
+import numpy as np
+import pytest
+
+from swimrl.analysis.figures import beyond
+from swimrl.config import compare_config, figures_config
+from swimrl.evaluation.compare import compare
+from swimrl.policies.files import PRETRAINED_ROOT
+
+from .conftest import SMALL
+
+SIZE = ["eval.n_flows=2", "eval.n_swimmers=6", "eval.flows_per_batch=2",
+        "compare.shared_flows=true", "compare.naive_shape_factors=[0.98,-0.98]"]
+
+
+def test_pareto_front():
+    r = np.array([0.5, 0.6, 0.4, 0.6, 0.3])
+    e = np.array([1.0, 1.5, 1.2, 1.4, 0.9])
+    # 2 is dominated by 0, 1 by 3 (same R_hat, more energy)
+    assert beyond.pareto_front(r, e).tolist() == [4, 0, 3]
+
+
+def test_labels_of_rows():
+    assert beyond.row_kind("sto") == "target-STO"
+    assert beyond.row_kind("naive(-0.98)") == "naive"
+    assert beyond.row_kind("policy(pretrained/ku10)") == "displacement policy"
+    assert beyond.row_kind("policy(outputs/beyond/target_ku10_seed1)") == "smart (target)"
+    assert beyond.energy_weight("policy(docs/results/beyond/energy_ku10_w0.3_seed2)") == 0.3
+    assert beyond.energy_weight("policy(docs/results/paper_runs/ku10_seed0/policy.pt)") == 0.0
+    assert beyond.energy_weight("naive(+0.98)") is None
+
+
+@pytest.fixture
+def figures(compose_cfg, tmp_path):
+    cfg = figures_config(compose_cfg(["threads=1", "progress=false"], name="figures"))
+    return replace(cfg, out=tmp_path / "fig", beyond=tmp_path / "beyond")
+
+
+def test_pending_without_records(figures):
+    assert "pending" in beyond.build_beyond_target(figures)
+    assert "pending" in beyond.build_beyond_energy(figures)
+
+
+def _compare(compose_cfg, out, over):
+    cfg = compare_config(compose_cfg([*SMALL, *SIZE, *over], name="compare"))
+    out.mkdir(parents=True)
+    (out / "comparison.json").write_text(json.dumps(compare(cfg)))
+
+
+def test_figures_from_comparison_records(compose_cfg, figures, tmp_path):
+    smart = tmp_path / "beyond" / "target_ku10_seed0"
+    energy = tmp_path / "beyond" / "energy_ku10_w0.3_seed0"
+    shutil.copytree(PRETRAINED_ROOT / "ku10", smart)
+    shutil.copytree(PRETRAINED_ROOT / "ku10", energy)
+    for d in (1.0, 2.0):
+        _compare(compose_cfg, tmp_path / "beyond" / "target" / f"ku10_D{d:g}",
+                 ["flow.kubo=10", "task=target", f"task.distance={d}",
+                  "task.arrival_radius=0.5", "episode.duration=5.0",
+                  "compare.strategies=[sto,naive,policy]",
+                  f"compare.policies=[pretrained/ku10,{smart}]"])
+    _compare(compose_cfg, tmp_path / "beyond" / "energy" / "ku10",
+             ["flow.kubo=10", "compare.strategies=[sto,naive,policy]",
+              f"compare.policies=[pretrained/ku10,{energy}]"])
+    out = beyond.build_beyond_target(figures)
+    assert (tmp_path / "fig" / "beyondTarget.png").is_file()
+    summary = out["summary"][10.0]
+    assert set(summary) == {"1.0", "2.0"}
+    assert set(summary["1.0"]) == {"target-STO", "best naive", "displacement policy",
+                                   "smart (target)"}
+    rec = json.loads((tmp_path / "beyond" / "target" / "ku10_D1" / "comparison.json").read_text())
+    naive = max((r for r in rec["rows"] if r["label"].startswith("naive")),
+                key=lambda r: r["arrival_mean"])
+    assert summary["1.0"]["best naive"]["arrival"] == naive["arrival_mean"]
+    assert "| Ku = 10 | 1 | target-STO |" in (tmp_path / "fig" / "beyondTarget.md").read_text()
+    out = beyond.build_beyond_energy(figures)
+    assert (tmp_path / "fig" / "beyondEnergy.png").is_file()
+    assert out["10.0"]["front"]  # at least one non-dominated row
