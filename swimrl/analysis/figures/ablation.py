@@ -143,7 +143,9 @@ def held_out_markdown(runs: list[AblationRun], summary: list[dict],
                      ", ".join(f"{r.smart:.3f}" for r in mine),
                      ", ".join(f"{r.sto:.3f}" for r in mine),
                      ", ".join(f"{r.ratio:.3f} ± {r.ratio_sem:.3f}" for r in mine),
-                     ", ".join(sizes), f"**{s['mean']:.3f} ± {s['std']:.3f}**"])
+                     ", ".join(sizes),
+                     f"**{s['mean']:.3f} ± {s['std']:.3f}**" if len(s["seeds"]) > 1
+                     else f"**{s['mean']:.3f}** (one seed)"])
     return intro + markdown_table(head, rows)
 
 
