@@ -28,6 +28,8 @@ from swimrl.policies.files import RunLayout
 CURVE_TAGS = (
     "eval/R_hat",
     "eval/R_hat_sem",
+    "eval/energy",
+    "eval/arrival",
     "train/R_hat",
     "train/episodes",
     "policy/std",
