@@ -41,8 +41,11 @@ def test_labels_of_rows():
 
 @pytest.fixture
 def figures(compose_cfg, tmp_path):
-    cfg = figures_config(compose_cfg(["threads=1", "progress=false"], name="figures"))
-    return replace(cfg, out=tmp_path / "fig", beyond=tmp_path / "beyond")
+    cfg = figures_config(compose_cfg(["threads=1", "progress=false", "flow.n_grid=64",
+                                      "flow.spacing=0.1", "episode.duration=1.0",
+                                      "figures.n_swimmers=4"], name="figures"))
+    return replace(cfg, out=tmp_path / "fig", beyond=tmp_path / "beyond",
+                   cache=tmp_path / "cache")
 
 
 def test_pending_without_records(figures):
@@ -84,3 +87,5 @@ def test_figures_from_comparison_records(compose_cfg, figures, tmp_path):
     out = beyond.build_beyond_energy(figures)
     assert (tmp_path / "fig" / "beyondEnergy.png").is_file()
     assert out["10.0"]["front"]  # at least one non-dominated row
+    assert (tmp_path / "fig" / "beyondEnergyMaps.png").is_file()
+    assert out["maps"] == {"10, w = 0": "pretrained/ku10", "10, w = 0.3": str(energy)}

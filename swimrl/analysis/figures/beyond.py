@@ -10,7 +10,10 @@
   ``E_hat`` per swimmer (:mod:`swimrl.physics.energy`) of every row, the policies coloured by
   the ``reward.energy_weight`` they were trained with (read from their run directory,
   ``..._w<W>_seed<k>``; the protocol's runs are ``w = 0``), and the non-dominated front
-  (:func:`pareto_front`).
+  (:func:`pareto_front`); beside it (``beyondEnergyMaps``) the maps of ku_pattern,
+  ``<Lambda | S_np, n_theta>`` and ``<Lambda | S_np, omega>``, of the first policy at
+  ``w = 0`` and at the largest ``w`` (``figures.n_flows x figures.n_swimmers`` swimmers each,
+  cached: :func:`~.mechanism.map_record`).
 
 A figure whose records are missing is reported ``pending`` with the command that makes them.
 """
@@ -27,8 +30,9 @@ from swimrl.analysis.plots import pyplot
 from swimrl.flows.labels import ku_display, parse_ku_name
 from swimrl.policies.baselines import StrategyLabel
 
-from .records import FiguresConfig
-from .style import COLORS, save, shown
+from .mechanism import map_mean, map_record
+from .records import Evaluation, FiguresConfig, eval_setup
+from .style import COLORS, LABEL, save, shown
 
 _TARGET_DIR = re.compile(r"ku(?P<ku>[^_]+)_D(?P<d>[0-9.]+)")
 _WEIGHT = re.compile(r"_w(?P<w>[0-9.eE+-]+)_seed(?P<seed>\d+)")
@@ -224,4 +228,50 @@ def build_beyond_energy(cfg: FiguresConfig) -> dict:
     fig.tight_layout()
     path = Path(cfg.out) / "beyondEnergy.png"
     save(fig, path)
-    return {"path": str(path), **{str(k): v for k, v in out.items()}}
+    maps = energy_map_policies(recs)
+    if maps:
+        fig_energy_maps(cfg, maps, Path(cfg.out) / "beyondEnergyMaps.png")
+    return {"path": str(path), **{str(k): v for k, v in out.items()},
+            "maps": {f"{ku:g}, w = {w:g}": p for (ku, w), p in maps.items()}}
+
+
+def energy_map_policies(recs: dict[float, dict]) -> dict[tuple[float, float], str]:
+    """``{(Ku, w): policy spec}``: per Ku, the first policy row at ``w = 0`` and at the
+    largest ``w`` (both only where a ``w > 0`` row exists)."""
+    out = {}
+    for ku, rec in recs.items():
+        policies: dict[float, str] = {}
+        for row in rec["rows"]:
+            w = energy_weight(row["label"])
+            if w is not None:
+                policies.setdefault(w, StrategyLabel.parse(row["label"]).arg)
+        if 0.0 in policies and max(policies) > 0:
+            out[(ku, 0.0)] = policies[0.0]
+            out[(ku, max(policies))] = policies[max(policies)]
+    return out
+
+
+def fig_energy_maps(cfg: FiguresConfig, policies: dict[tuple[float, float], str],
+                    path: Path) -> None:
+    """The ku_pattern maps of each ``(Ku, w)`` policy, one column each."""
+    plt = pyplot()
+    keys = sorted(policies)
+    fig, axes = plt.subplots(2, len(keys), figsize=(3.3 * len(keys), 6.4), squeeze=False,
+                             layout="constrained")
+    im = None
+    for i, (ku, w) in enumerate(keys):
+        setup = eval_setup(cfg, ku, cfg.n_flows, cfg.n_swimmers)
+        ev = Evaluation(f"energy_{ku:g}_w{w:g}", "statistics", setup,
+                        {"smart": policies[(ku, w)]})
+        a = map_record(cfg, ev)
+        for row, other in enumerate(("n_theta", "omega")):
+            mean, edges = map_mean(a, other)
+            ax = axes[row, i]
+            im = ax.pcolormesh(edges[0], edges[1], mean.T, cmap="coolwarm", vmin=-1, vmax=1)
+            ax.set_xlabel(LABEL["S_np"])
+            ax.set_ylabel(LABEL[other])
+            ax.set_title(f"{ku_display(ku)}, w = {w:g}", fontsize=9)
+    fig.colorbar(im, ax=axes, shrink=0.6, label=r"$\langle\Lambda\rangle$")
+    fig.suptitle(f"policies trained without (w = 0) and with the largest energy cost; "
+                 f"{cfg.n_flows} flow(s) x {cfg.n_swimmers} swimmers each", fontsize=8)
+    save(fig, path)
