@@ -157,7 +157,8 @@ def build_beyond_target(cfg: FiguresConfig) -> dict:
     fig.tight_layout()
     path = Path(cfg.out) / "beyondTarget.png"
     save(fig, path)
-    table = ("| Ku | D / ℓ_f | strategy | arrived within T (± SEM; smart: ± std over seeds) | "
+    table = ("| Ku | D / ℓ_f | strategy | arrived within T (± SEM over flows; smart, several "
+             "seeds: ± std over seeds) | "
              "median arrival time / τ_K | rows |\n|---|---|---|---|---|---|\n"
              + "\n".join(lines) + "\n")
     (Path(cfg.out) / "beyondTarget.md").write_text(table)
