@@ -57,7 +57,7 @@ def _log_ticks(ax, x: np.ndarray) -> None:
         ax.set_xscale("symlog", linthresh=float(x[x > 0].min()) if (x > 0).any() else 1.0)
     else:
         ax.set_xscale("log")
-    ax.set_xticks(x, [f"{v:g}" for v in x])
+    ax.set_xticks(x, [f"{v:g}" for v in x], rotation=45 if x.size > 4 else 0)
     ax.minorticks_off()
 
 
@@ -78,6 +78,7 @@ def fig_sweep(x: np.ndarray, r: dict[str, np.ndarray], err: dict[str, np.ndarray
         b.errorbar(x, q, yerr=q_err, color=COLORS["smart"], marker="o", capsize=3)
         b.axhline(1, color=COLORS["STO"], ls="--", lw=1)
         _log_ticks(b, x)
+        b.set_xlim(axes[0, 0].get_xlim())
         b.set_xlabel(xlabel)
         b.set_ylabel(r"$\hat R_{\rm smart}/\hat R_{\rm STO}$ (paired, bars: SEM)")
         out["ratio"], out["ratio_sem"] = q.tolist(), q_err.tolist()
