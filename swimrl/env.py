@@ -367,9 +367,11 @@ class SwimmerEnv(EnvBase):
         ``rho <= task.arrival_radius``."""
         moving = ~self.arrived
         rho_before = (self.target - self.displacement()).norm(dim=-1)
-        frozen = (self.pos.clone(), self.image.clone(), self.theta.clone())
+        all_moving = bool(moving.all())
+        frozen = None if all_moving else (self.pos.clone(), self.image.clone(),
+                                          self.theta.clone())
         self.integrate(action)
-        if not bool(moving.all()):
+        if frozen is not None:
             keep = self.arrived.unsqueeze(-1)
             self.pos.copy_(torch.where(keep, frozen[0], self.pos))
             self.image.copy_(torch.where(keep, frozen[1], self.image))

@@ -122,18 +122,25 @@ def read_ablation(root: Path) -> list[AblationRun]:
     STO, no policy row, or a policy row other than the run's final evaluation)."""
     name = RunLayout(root).comparison.name
     runs = [r for p in sorted(Path(root).rglob(name)) if (r := _run(p))]
-    for key in ("kubo", "frames", "held_out"):
-        values = sorted({getattr(r, key) for r in runs})
+    check_one_ablation(root, runs, {key: {getattr(r, key) for r in runs}
+                                    for key in ("kubo", "frames", "held_out")})
+    return runs
+
+
+def check_one_ablation(root: Path, runs: list[AblationRun], shared: dict[str, set]) -> None:
+    """ValueError (one line naming ``root``) unless every value set of ``shared`` (what all
+    runs must have in common: Ku, budget, held-out sizes) has one value and every signal set
+    and seed occurs once in ``runs``."""
+    for key, values in shared.items():
         if len(values) > 1:
-            raise ValueError(f"ablation records under {root}: runs differ in {key} ({values}); "
-                             "allowed: one value for every run")
+            raise ValueError(f"ablation records under {root}: runs differ in {key} "
+                             f"({sorted(values)}); allowed: one value for every run")
     seen = set()
     for r in runs:
         if (r.signals, r.seed) in seen:
             raise ValueError(f"ablation records under {root}: signals {list(r.signals)} with "
                              f"seed {r.seed} found twice; allowed: one run per set and seed")
         seen.add((r.signals, r.seed))
-    return runs
 
 
 def summarise_sets(runs: list[AblationRun]) -> list[dict]:

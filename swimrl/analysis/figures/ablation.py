@@ -26,6 +26,7 @@ from swimrl.analysis.plots import pyplot
 from swimrl.analysis.signal_ablation import (
     AblationRun,
     canonical,
+    check_one_ablation,
     draw_curves,
     draw_ratios,
     summarise_sets,
@@ -220,18 +221,10 @@ def read_held_out(ablation: Path, results: Path) -> tuple[list[AblationRun], dic
             r, h = _comparison_runs(protocol, files)
             runs += r
             held.append(h)
-    for key, values in (("kubo", {r.kubo for r in runs}), ("frames", {r.frames for r in runs}),
-                        ("held-out seed", {h["seed"] for h in held}),
-                        ("held-out n_flows", {h["n_flows"] for h in held})):
-        if len(values) > 1:
-            raise ValueError(f"ablation records under {ablation}: runs differ in {key} "
-                             f"({sorted(values)}); allowed: one value for every run")
-    seen = set()
-    for r in runs:
-        if (r.signals, r.seed) in seen:
-            raise ValueError(f"ablation records under {ablation}: signals {list(r.signals)} "
-                             f"with seed {r.seed} found twice; allowed: one run per set and seed")
-        seen.add((r.signals, r.seed))
+    check_one_ablation(ablation, runs, {"kubo": {r.kubo for r in runs},
+                                        "frames": {r.frames for r in runs},
+                                        "held-out seed": {h["seed"] for h in held},
+                                        "held-out n_flows": {h["n_flows"] for h in held}})
     return runs, (held[0] if held else {}), files
 
 

@@ -114,13 +114,19 @@ def _nanmean(values) -> float:
     return float(np.nanmean(v)) if np.isfinite(v).any() else float("nan")
 
 
+def _pending(cfg: FiguresConfig, records: str) -> dict:
+    """A figure without its ``records`` (a glob under ``figures.beyond``): pending, with where
+    the commands that make them are."""
+    return {"pending": f"no {records} under {shown(cfg.beyond)} "
+                       f"(commands: {shown(cfg.beyond)}/README.md)"}
+
+
 def build_beyond_target(cfg: FiguresConfig) -> dict:
     """Fig. beyondTarget: arrival probability (top) and median arrival time (bottom) against
     the target distance, one column per Ku; a table ``beyondTarget.md`` beside it."""
     recs = read_target(cfg.beyond)
     if not recs:
-        return {"pending": f"no target/ku*_D*/comparison.json under {shown(cfg.beyond)} "
-                           f"(commands: {shown(cfg.beyond)}/README.md)"}
+        return _pending(cfg, "target/ku*_D*/comparison.json")
     plt = pyplot()
     fig, axes = plt.subplots(2, len(recs), figsize=(4.2 * len(recs), 6.2), squeeze=False)
     lines, data = [], {}
@@ -190,8 +196,7 @@ def build_beyond_energy(cfg: FiguresConfig) -> dict:
     each Ku's comparison, the constant shapes as a line, the non-dominated front dashed."""
     recs = read_energy(cfg.beyond)
     if not recs:
-        return {"pending": f"no energy/ku*/comparison.json under {shown(cfg.beyond)} "
-                           f"(commands: {shown(cfg.beyond)}/README.md)"}
+        return _pending(cfg, "energy/ku*/comparison.json")
     plt = pyplot()
     fig, axes = plt.subplots(1, len(recs), figsize=(4.6 * len(recs), 3.9), squeeze=False)
     cmap = plt.get_cmap("autumn_r")
