@@ -89,3 +89,29 @@ def test_figures_from_comparison_records(compose_cfg, figures, tmp_path):
     assert out["10.0"]["front"]  # at least one non-dominated row
     assert (tmp_path / "fig" / "beyondEnergyMaps.png").is_file()
     assert out["maps"] == {"10, w = 0": "pretrained/ku10", "10, w = 0.3": str(energy)}
+    out = beyond.build_beyond_target_paths(figures)
+    assert (tmp_path / "fig" / "beyondTargetPaths.png").is_file()
+    assert out["10.0"]["distance"] == 2.0  # the middle of D = 1, 2
+    assert set(out["10.0"]["actors"]) == set(beyond.TARGET_KINDS)
+    cache = next((tmp_path / "cache").glob("target_paths_10_D2-*.npz"))
+    a = np.load(cache)
+    xy = beyond.target_frame(a["position"][0], a["target"][0])
+    gap = np.linalg.norm(xy[..., -1, :] - [2.0, 0.0], axis=-1)
+    arrived = np.isfinite(a["arrival_time"][0])
+    # an arrived swimmer ends within the arrival radius of its target and stops there
+    assert np.all(gap[arrived] <= 0.5 + 1e-5) and np.all(gap[~arrived] > 0.5 - 1e-5)
+    assert [out["10.0"]["arrived"][k] for k in beyond.TARGET_KINDS] == arrived.sum(-1).tolist()
+
+
+def test_target_frame():
+    """Start at the origin, target on the positive x axis, lengths kept."""
+    rng = np.random.default_rng(1)
+    start, target = rng.normal(size=(5, 2)), rng.normal(size=(5, 2)) * 10
+    path = start[:, None, :] + rng.normal(size=(5, 7, 2)).cumsum(1)
+    path[:, 0] = start
+    path[:, -1] = target
+    xy = beyond.target_frame(path, target)
+    d = np.linalg.norm(target - start, axis=-1)
+    assert np.allclose(xy[:, 0], 0.0)
+    assert np.allclose(xy[:, -1], np.stack([d, np.zeros(5)], -1))
+    assert np.allclose(np.linalg.norm(xy, axis=-1), np.linalg.norm(path - start[:, None], axis=-1))

@@ -3,6 +3,7 @@ and gives the uninterrupted comparison's record, simulating only the chunks not 
 
 from __future__ import annotations
 
+import hashlib
 import json
 from pathlib import Path
 
@@ -13,7 +14,7 @@ from swimrl.env import SwimmerEnv
 from swimrl.errors import BadFileError, ConfigError
 from swimrl.evaluation.compare import compare
 from swimrl.policies import pretrained
-from swimrl.policies.files import RunLayout
+from swimrl.policies.files import RunLayout, sha256_file
 
 from .conftest import SMALL
 from .test_bad_input import COMPARE, _run_cases
@@ -128,7 +129,12 @@ def test_resume_with_a_replaced_policy_file_is_refused(compose_cfg, tmp_path):
     policy.write_bytes((root / "ku10" / "policy.pt").read_bytes())
     over = ["compare.strategies=[sto,policy]", f"compare.policies=[{policy}]"]
     partial = RunLayout(tmp_path).comparison_partial
-    compare(_config(compose_cfg, *over), partial)
+    record = compare(_config(compose_cfg, *over), partial)
+    # each policy row names the exact file it evaluated; baselines name none
+    assert "policy_sha256" not in record["rows"][0]
+    assert record["rows"][1]["policy"] == str(policy)
+    assert record["rows"][1]["policy_sha256"] == sha256_file(policy)
+    assert sha256_file(policy) == hashlib.sha256(policy.read_bytes()).hexdigest()
     policy.write_bytes((root / "ku1" / "policy.pt").read_bytes())
     with pytest.raises(ConfigError, match=r"digests"):
         compare(_config(compose_cfg, *over, "compare.resume=true"), partial)

@@ -30,6 +30,7 @@ import torch
 
 from swimrl.errors import BadFileError, ConfigError, as_bool
 from swimrl.policies.baselines import STRATEGIES, StrategyLabel, StrategySpec
+from swimrl.policies.files import resolve_policy_file, sha256_file
 
 from .jobs import Preemption
 from .records import summary_line, write_json
@@ -241,6 +242,10 @@ def compare(cfg: CompareConfig, partial: Path | None = None,
                      **{k: m[k] for k in ROW_OUTCOMES if k in m},
                      "swimmer_substeps_per_s": m["swimmer_substeps_per_s"],
                      "wall_s": m["wall_s"]})
+        variant = cfg.variants[len(rows) - 1]
+        if variant.policy is not None:  # which exact file the row evaluated
+            rows[-1].update(policy=variant.policy,
+                            policy_sha256=sha256_file(resolve_policy_file(variant.policy)))
         if "arrival_per_flow" in m:
             diff, diff_sem = paired_difference(m["arrival_per_flow"],
                                                results[0]["arrival_per_flow"])

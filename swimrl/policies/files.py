@@ -23,6 +23,7 @@ evaluation config, otherwise a :class:`~swimrl.config.ConfigError` names both se
 from __future__ import annotations
 
 import dataclasses
+import hashlib
 import importlib.resources
 from dataclasses import dataclass
 from pathlib import Path
@@ -231,6 +232,15 @@ def save_policy(path: Path, *, actor, counters: dict, config: dict, meta: dict) 
         **meta,
     }
     return atomic_write(path, lambda fh: torch.save(data, fh), make_dirs=True)
+
+
+def sha256_file(path: Path) -> str:
+    """sha256 (hex) of a file's bytes: how records name the exact policy file they used."""
+    h = hashlib.sha256()
+    with open(path, "rb") as fh:
+        for block in iter(lambda: fh.read(1 << 20), b""):
+            h.update(block)
+    return h.hexdigest()
 
 
 def available_pretrained(root: Path | None = None) -> list[str]:

@@ -6,7 +6,7 @@ import time
 from collections.abc import Callable
 
 from .ablation import build_ablation
-from .beyond import build_beyond_energy, build_beyond_target
+from .beyond import build_beyond_energy, build_beyond_target, build_beyond_target_paths
 from .dns import build_dns_flow
 from .mechanism import build_ku01, build_ku_inf, build_ku_pattern
 from .records import FiguresConfig
@@ -29,6 +29,7 @@ BUILDERS: dict[str, Callable[[FiguresConfig], dict]] = {
     "dnsFlow": build_dns_flow,
     "videos": build_videos,
     "beyondTarget": build_beyond_target,
+    "beyondTargetPaths": build_beyond_target_paths,
     "beyondEnergy": build_beyond_energy,
 }
 

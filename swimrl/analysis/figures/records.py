@@ -66,13 +66,13 @@ from swimrl.evaluation.trajectories import TrajectoryRecorder
 from swimrl.flows.build import StochasticSpec
 from swimrl.flows.labels import ku_display, ku_name
 from swimrl.policies.baselines import StrategyLabel, StrategySpec
-from swimrl.policies.files import load_policy, resolve_policy_file
+from swimrl.policies.files import load_policy, resolve_policy_file, sha256_file
 from swimrl.runtime import Runtime
 
 #: The figures, in build order (the keys of :data:`swimrl.analysis.figures.build.BUILDERS`).
 FIGURES = ("swimmer", "smartPerformance", "ku0.1", "kuInf", "ku_pattern", "trainingCurves",
            "ablation", "robustness-noise", "robustness", "dnsFlow", "videos", "beyondTarget",
-           "beyondEnergy")
+           "beyondTargetPaths", "beyondEnergy")
 #: The figures that keep a record ``<records>/<figure>.json`` (:func:`figure_record`).
 RECORDED = ("smartPerformance", "ku0.1", "kuInf", "ku_pattern", "ablation", "robustness-noise",
             "robustness")
@@ -235,15 +235,6 @@ class FiguresConfig:
 
 
 # -- files ------------------------------------------------------------------------------------
-def sha256_file(path: Path) -> str:
-    """sha256 (hex) of a file's bytes."""
-    h = hashlib.sha256()
-    with open(path, "rb") as fh:
-        for block in iter(lambda: fh.read(1 << 20), b""):
-            h.update(block)
-    return h.hexdigest()
-
-
 def portable(path: Path | str) -> str:
     """``path`` relative to the working directory where it lies below it (links kept as
     named), else absolute: how a record names a file, so that a clone elsewhere reads it."""
