@@ -232,12 +232,14 @@ def build_beyond_target_paths(cfg: FiguresConfig) -> dict:
         out[str(ku)] = {"distance": float(dist), "actors": actors, "arrived": {}}
         for col, kind in enumerate(kinds):
             ax = axes[row, col]
+            if kind not in actors:
+                ax.axis("off")
+                ax.text(0.5, 0.5, f"{ku_display(ku)}: {kind}\nnot in the comparison",
+                        ha="center", va="center", fontsize=8, transform=ax.transAxes)
+                continue
             ax.add_patch(plt.Circle((dist, 0.0), rec["arrival_radius"], color="0.6", alpha=0.4))
             ax.plot([0, dist], [0, 0], ":", color="0.5", lw=0.8)
             ax.plot(0, 0, "r*", ms=8)
-            if kind not in actors:
-                ax.set_title(f"{ku_display(ku)}: {kind} (no row)", fontsize=8)
-                continue
             k = names.index(actors[kind])
             for i in range(xy.shape[1]):
                 line = ax.plot(xy[k, i, :, 0], xy[k, i, :, 1], lw=0.9)[0]
