@@ -367,9 +367,8 @@ class SwimmerEnv(EnvBase):
         ``rho <= task.arrival_radius``."""
         moving = ~self.arrived
         rho_before = (self.target - self.displacement()).norm(dim=-1)
-        all_moving = bool(moving.all())
-        frozen = None if all_moving else (self.pos.clone(), self.image.clone(),
-                                          self.theta.clone())
+        frozen = None if bool(moving.all()) else (self.pos.clone(), self.image.clone(),
+                                                  self.theta.clone())
         self.integrate(action)
         if frozen is not None:
             keep = self.arrived.unsqueeze(-1)

@@ -234,7 +234,7 @@ def compare(cfg: CompareConfig, partial: Path | None = None,
             print(line, flush=True)
     ref = np.asarray(results[0]["per_flow"])
     rows = []
-    for m in results:
+    for variant, m in zip(cfg.variants, results, strict=True):
         ratio, ratio_sem = paired_ratio(np.asarray(m["per_flow"]), ref)
         rows.append({"label": m["label"], "R_hat_mean": m["R_hat_mean"],
                      "R_hat_sem": m["R_hat_sem"], "R_hat_std": m["R_hat_std"],
@@ -242,7 +242,6 @@ def compare(cfg: CompareConfig, partial: Path | None = None,
                      **{k: m[k] for k in ROW_OUTCOMES if k in m},
                      "swimmer_substeps_per_s": m["swimmer_substeps_per_s"],
                      "wall_s": m["wall_s"]})
-        variant = cfg.variants[len(rows) - 1]
         if variant.policy is not None:  # which exact file the row evaluated
             rows[-1].update(policy=variant.policy,
                             policy_sha256=sha256_file(resolve_policy_file(variant.policy)))
