@@ -400,7 +400,7 @@ def build_ku01(cfg: FiguresConfig) -> dict:
     duration = rec["params"]["duration"]
     out = fig_ku01(d["traj"], map_record(cfg, stats[0]), d["sto_signals"], d["sto_Lambda"],
                    cfg.out / "ku0.1.png",
-                   f"Ku = 0.1; (a) shipped policy ku0.1, {sizes_title(tf, ts, duration)}; "
+                   f"Ku = 0.1; (a) shipped policy ku0.1, {sizes_title(tf, ts, duration)};\n"
                    f"(b) the protocol's run seed {seed0} on {mf} flows x {ms} swimmers "
                    f"(inset: its map); corr(Λ, $n_\\theta S_{{np}}$) per seed: {corr}")
     out["record"] = str(cfg.records / "ku0.1.json")
@@ -509,7 +509,7 @@ def build_ku_pattern(cfg: FiguresConfig) -> dict:
     out = fig_ku_pattern({k: map_record(cfg, map_evaluation(cfg, k, seed0)) for k in KUS},
                          cfg.out / "ku_pattern.png",
                          f"smart, the protocol's runs seed {seed0}; "
-                         f"{sizes_title(flows, swimmers, rec['params']['duration'])} per Ku; "
+                         f"{sizes_title(flows, swimmers, rec['params']['duration'])} per Ku;\n"
                          f"correlation of the seeds' <Λ|S_np, ω> maps (pairs of seeds "
                          f"{', '.join(map(str, cfg.map_seeds))}): {corr}")
     out["record"] = str(cfg.records / "ku_pattern.json")
