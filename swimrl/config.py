@@ -227,7 +227,7 @@ def dns_figures_config(node: DictConfig, path) -> DNSFiguresConfig:
     return from_node(
         DNSFiguresConfig, {"dns.": node},
         store=path(node.store), record=path(node.record), transfer=path(node.transfer),
-        checks=path(node.checks), curve=None if node.curve is None else path(node.curve),
+        checks=path(node.checks), curves=tuple(path(c) for c in node.curves or ()),
         glyph_window=node.glyph_window, glyph_every=node.glyph_every,
     )
 

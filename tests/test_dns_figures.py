@@ -52,6 +52,32 @@ def test_transfer_summary_pairs_each_flow_with_sto(tmp_path):
     assert ku_of("policy(runs/ku10_seed0)") is None and ku_of("minimal(ku1_0)") is None
 
 
+def test_trained_ratio_per_realisation_and_its_spread_over_runs(tmp_path):
+    _comparison(tmp_path / "0", {"sto": [1.0, 1.0], "policy(pretrained/ku10)": [1.2, 1.6],
+                                 "policy(a)": [1.0, 1.0], "policy(b)": [1.4, 1.4]})
+    _comparison(tmp_path / "1", {"sto": [1.0, 1.0], "policy(pretrained/ku10)": [1.0, 1.0],
+                                 "policy(a)": [0.5, 1.5], "policy(b)": [1.0, 1.5]})
+    r = dfig.trained_ratio(dfig.read_transfer(tmp_path), "policy(pretrained/ku10)",
+                           ["policy(a)", "policy(b)"])
+    np.testing.assert_allclose(r["per_realisation"], [[1.4, 1.0], [1.0, 0.8]])
+    assert r["realisation_mean"] == pytest.approx([1.2, 0.9])
+    assert r["realisation_std_over_runs"] == pytest.approx([np.std([1.4, 1.0], ddof=1),
+                                                            np.std([1.0, 0.8], ddof=1)])
+    assert r["overall"] == pytest.approx([4.8 / 4.0, 4.8 / 5.3])
+    assert r["overall_std_over_runs"] == pytest.approx(np.std(r["overall"], ddof=1))
+    table = dfig.trained_ratio_markdown(r, dfig.realisation_names(tmp_path))
+    assert "| 0 | 1.400 | 1.000 | 1.200 |" in table and "| all flows | 1.200 |" in table
+    assert "| 2 | 1.400 |" in dfig.trained_ratio_markdown(r, ["2", "3"])
+
+
+def test_dns_trained_must_be_one_of_the_trained_seeds():
+    with initialize_config_module("swimrl.conf", version_base="1.3"):
+        cfg = compose(config_name="figures", overrides=["dns.trained=pretrained/ku10"])
+    from swimrl.errors import ConfigError
+    with pytest.raises(ConfigError, match="dns.trained='pretrained/ku10' is invalid"):
+        figures_config(cfg)
+
+
 def test_figure_draws_every_panel_from_tiny_records(tmp_path):
     rng = np.random.default_rng(0)
     n = 50  # decisions, T_u = 0.1 tau_K
@@ -74,13 +100,13 @@ def test_figure_draws_every_panel_from_tiny_records(tmp_path):
     curve = {"frames": np.array([0.0, 1e6, 2e6]), "eval/R_hat": np.array([0.2, np.nan, 0.5]),
              "eval/R_hat_sem": np.array([0.01, np.nan, 0.01])}
     out = dfig.fig_dns_flow(rec, pdfs, summary, tmp_path / "d.png", glyph_window=4.0,
-                            glyph_every=1.0, curve=curve)
-    assert out["f"] == [0.2, 0.5]
+                            glyph_every=1.0, curves={"seed0": curve, "seed1": curve})
+    assert out["f"] == {"seed0": [0.2, 0.5], "seed1": [0.2, 0.5]}
     assert (tmp_path / "d.png").stat().st_size > 10_000
     assert out["a"]["window_decisions"] == 40 and out["a"]["glyphs"] == 4  # t = 0, 1, 2, 3
     assert out["b"] == ["omega"] and out["d"] == 4 and out["e"] == 4
     assert out["c"]["smart"] == [[1.0, 0.9, 0.05], [10.0, 1.1, 0.05]]
-    assert out["c"]["lines"] == {"policy(pretrained/dns)": 1.2, "naive(+0.98)": 0.6}
+    assert out["c"]["lines"] == {"trained in the DNS": 1.2, "naive(+0.98)": 0.6}
     assert out["c"]["not_drawn"] == ["policy(runs/other)"]
     none = dfig.fig_dns_flow(None, None, None, tmp_path / "e.png")
     assert none == {} and (tmp_path / "e.png").exists()
@@ -106,7 +132,8 @@ def test_replay_record_is_made_once_from_the_store_and_read_after(tmp_path):
     cfg = replace(figures_config(fig_cfg), out=tmp_path / "fig", cache=tmp_path / "cache")
     dns = replace(cfg.dns, store=store, record=tmp_path / "rec" / "record.npz",
                   transfer=tmp_path / "none", checks=tmp_path / "none.json",
-                  policy="naive(-0.5)", trained="naive(0.5)", curve=None, n_swimmers=5,
+                  policy="naive(-0.5)", trained="naive(0.5)", trained_seeds=("naive(0.5)",),
+                  curves=(), n_swimmers=5,
                   n_traj=2, decode_n=None)
     missing, why = dfig.dns_record(cfg, replace(dns, policy="nowhere/policy.pt"))
     assert missing is None and "dns.policy" in why and not dns.record.exists()
@@ -126,6 +153,12 @@ def test_replay_record_is_made_once_from_the_store_and_read_after(tmp_path):
     dist = np.linalg.norm(final, axis=-1)  # box units, as reference_distance
     assert dist / float(a["reference_distance"]) == pytest.approx(a["R_hat"][0, :2], rel=1e-4)
     assert a["vorticity"].shape[0] == 2 and math.isclose(float(a["time"][-1]), 1.0)
+    summary = dfig.replay_summary(a)
+    assert list(summary) == ["naive(-0.5)", "naive", "sto", "naive(0.5)"]
+    assert summary["naive(-0.5)"]["R_hat"] == pytest.approx(float(a["R_hat"][0].mean()))
+    assert summary["naive(-0.5)"]["distance_L"] == pytest.approx(  # box units, as dist
+        float(a["R_hat"][0].mean() * a["reference_distance"]))
+    assert "| sto |" in dfig.replay_markdown(summary, "run.zarr")
     store.rename(tmp_path / "gone.zarr")
     b, _ = dfig.dns_record(cfg, dns)
     assert all(np.array_equal(a[k], b[k], equal_nan=a[k].dtype.kind == "f") for k in a)

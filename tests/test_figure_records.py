@@ -180,8 +180,10 @@ def test_every_record_at_tiny_sizes_and_no_input_under_shipped_before(tiny, monk
                                                                     tmp_path):
     """Each figure with a record makes it from the committed inputs (the protocol's
     comparisons, the ablation's held-out comparisons, the fits) and the shipped policies;
-    no record names a file under shipped_before/; dnsFlow, whose committed DNS records were
-    made with the earlier policies, is pending with the commands that remake them."""
+    no record names a file under shipped_before/; dnsFlow names no input there and draws the
+    transfer (c) with the ratio to the three DNS-trained runs and their curves (f) from the
+    committed records (its replay record was made at the full sizes, so at these it is
+    refused and (a) is pending)."""
     from swimrl.analysis.figures.build import build_figures
 
     monkeypatch.chdir(REPO)  # the comparisons name their policies from the repository root
@@ -210,6 +212,12 @@ def test_every_record_at_tiny_sizes_and_no_input_under_shipped_before(tiny, monk
     assert perf["derived"]["protocol"]["ku10"]["n_flows"] == 100
     pattern = json.loads((cfg.records / "ku_pattern.json").read_text())
     assert set(pattern["derived"]["ku10"]["map_correlation"]) == {"n_theta", "omega"}
+    from swimrl.analysis.figures.dns import shipped_before_inputs
+
+    assert shipped_before_inputs(cfg.dns) == []
     dns = build_figures(replace(cfg, only="dnsFlow"), log=lambda _: None)["dnsFlow"]
-    assert "shipped_before" in dns["pending"] and "swimrl-dns seed=2" in dns["pending"]
-    assert "a" not in dns and "c" not in dns
+    assert "a" not in dns and "made with other" in dns["pending"]
+    assert "no training curve" not in dns["pending"] and len(dns["f"]) == 3
+    ratio = dns["trained_ratio"]
+    assert ratio["transferred"] == "policy(pretrained/ku10)" and len(ratio["trained"]) == 3
+    assert len(ratio["per_realisation"]) == 4 and dns["c"]["smart"]

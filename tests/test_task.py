@@ -186,20 +186,32 @@ def test_displacement_reproduces_the_recorded_r_hat(compose_cfg, case):
     """``task=displacement`` (the default) gives the per-flow R_hat recorded before the task
     group existed (``tests/data/displacement_reference.json``): bit for bit for the closed-form
     strategies (STO, naive), which exercise the whole environment path (flow, signals in the
-    frame of ``e_r``, reward, episode end). The policy rows are compared within one process
-    (default against an explicit ``task=displacement``): a network's matrix products round
-    differently on different CPU instruction sets and the chaotic trajectories amplify that
-    over ``T = 200 tau_K`` (a few % per flow), so recorded policy values are not portable."""
+    frame of ``e_r``, reward, episode end); an explicit ``task=displacement`` gives the same."""
     ref = json.loads(REFERENCE.read_text())["cases"][case]
+    closed = {k: v for k, v in ref["per_flow"].items() if not k.startswith("policy")}
+    over = [o for o in ref["overrides"] if not o.startswith("compare.strategies")]
+    strategies = ",".join(k.split("(")[0] for k in closed)
+    for extra in ([], ["task=displacement"]):
+        cfg = compose_cfg(["threads=1", "eval.progress=false", *over,
+                           f"compare.strategies=[{strategies}]", *extra], name="compare")
+        rows = {r["label"]: r["per_flow"] for r in compare(compare_config(cfg))["rows"]}
+        assert closed and rows == closed
+
+
+@pytest.mark.parametrize("case", range(2))
+def test_displacement_policy_rows_reproduce_the_recorded_short_horizon(compose_cfg, case):
+    """The network path (policy rows) against a recorded reference over ``T = 2 tau_K`` (20
+    decisions), to ``rtol = 1e-5``. A network's matrix products round differently on other CPU
+    instruction sets and chaotic trajectories amplify that: the eager and the fused kernel
+    (another float32 rounding) differ by <= 1.2e-7 relative at 2 tau_K, 3.5e-6 at 20 tau_K
+    and 4 % at 200 tau_K, so only a short horizon is portable; a change of the environment
+    path (signals, frame, reward, policy input) moves these values by far more."""
+    ref = json.loads(REFERENCE.read_text())["policy_short"][case]
     cfg = compose_cfg(["threads=1", "eval.progress=false", *ref["overrides"]], name="compare")
     rows = {r["label"]: r["per_flow"] for r in compare(compare_config(cfg))["rows"]}
-    closed = {k: v for k, v in ref["per_flow"].items() if not k.startswith("policy")}
-    assert closed and {k: rows[k] for k in closed} == closed
-    explicit = compose_cfg(["threads=1", "eval.progress=false", *ref["overrides"],
-                            "task=displacement"], name="compare")
-    again = {r["label"]: r["per_flow"] for r in compare(compare_config(explicit))["rows"]}
-    policies = [k for k in rows if k.startswith("policy")]
-    assert policies and all(again[k] == rows[k] for k in policies)
+    assert ref["per_flow"] and rows.keys() == ref["per_flow"].keys()
+    for label, values in ref["per_flow"].items():
+        assert rows[label] == pytest.approx(values, rel=1e-5, abs=0)
 
 
 def test_target_training_end_to_end(compose_cfg, tmp_path):

@@ -39,6 +39,7 @@ from __future__ import annotations
 import dataclasses
 import json
 import math
+from collections.abc import Sequence
 from pathlib import Path
 
 import numpy as np
@@ -80,9 +81,11 @@ REMAKE = ("swimrl-dns seed=2 (the held-out store {store}; docs/dns.md), then rm 
 
 def shipped_before_inputs(dns: DNSFiguresConfig) -> list[str]:
     """The ``dns.*`` inputs under ``shipped_before/`` (``KEY=VALUE``)."""
-    keys = ("policy", "trained", "store", "record", "transfer", "checks", "curve")
-    return [f"dns.{k}={getattr(dns, k)}" for k in keys
-            if getattr(dns, k) is not None and under_shipped_before(getattr(dns, k))]
+    keys = ("policy", "trained", "store", "record", "transfer", "checks")
+    named = [(k, getattr(dns, k)) for k in keys if getattr(dns, k) is not None]
+    named += [("trained_seeds", t) for t in dns.trained_seeds]
+    named += [("curves", c) for c in dns.curves]
+    return [f"dns.{k}={v}" for k, v in named if under_shipped_before(v)]
 
 
 def shipped_before_pending(dns: DNSFiguresConfig) -> str:
@@ -238,6 +241,67 @@ def transfer_markdown(summary: dict[str, dict]) -> str:
     return markdown_table(head, rows)
 
 
+def trained_ratio(per: dict[str, np.ndarray], transferred: str,
+                  trained: Sequence[str]) -> dict:
+    """The transferred policy against the DNS-trained runs, realisation by realisation:
+    ``r_{k,i} = <R_hat_transferred>_i / <R_hat_trained_k>_i`` (means over the flows of
+    realisation ``i``, the same flows for both), per realisation the mean and std over the
+    runs ``k``, and per run its ratio over all flows."""
+    real = per["realisation"]
+    num = per[transferred]
+    runs = np.array([[num[real == i].mean() / per[t][real == i].mean() for i in np.unique(real)]
+                     for t in trained])  # (runs, realisations)
+    overall = [float(num.mean() / per[t].mean()) for t in trained]
+    return {"transferred": transferred, "trained": list(trained),
+            "per_realisation": runs.T.tolist(),
+            "realisation_mean": runs.mean(0).tolist(),
+            "realisation_std_over_runs": [_std(c) for c in runs.T],
+            "overall": overall, "overall_mean": float(np.mean(overall)),
+            "overall_std_over_runs": _std(np.asarray(overall))}
+
+
+def realisation_names(root: Path) -> list[str]:
+    """The held-out realisations of :func:`read_transfer` in its order: the directory of
+    each ``comparison.json`` under ``root``."""
+    return [p.parent.name for p in sorted(Path(root).rglob(RunLayout(root).comparison.name))]
+
+
+def trained_ratio_markdown(r: dict, names: Sequence[str] | None = None) -> str:
+    """One row per held-out realisation (``names``, default 1, 2, ...): the ratio for each
+    DNS-trained run, mean and std over the runs; last row: all flows."""
+    head = ["held-out realisation", *[f"÷ {t}" for t in r["trained"]], "mean", "std over runs"]
+    names = list(names) if names else [str(i + 1) for i in range(len(r["per_realisation"]))]
+    rows = [[name, *[f"{v:.3f}" for v in per], f"{m:.3f}", f"{sd:.3f}"]
+            for name, per, m, sd in zip(names, r["per_realisation"], r["realisation_mean"],
+                                        r["realisation_std_over_runs"], strict=True)]
+    rows.append(["all flows", *[f"{v:.3f}" for v in r["overall"]], f"{r['overall_mean']:.3f}",
+                 f"{r['overall_std_over_runs']:.3f}"])
+    return (f"{r['transferred']} / DNS-trained run, per held-out realisation (ratio of the "
+            "mean R̂ over the same flows):\n\n" + markdown_table(head, rows))
+
+
+def replay_summary(rec: dict) -> dict[str, dict]:
+    """The replay record's strategies (``input_policy``, naive, STO, ``input_trained``, the
+    order of :func:`make_record`): ``R_hat`` (mean, SEM over swimmers) and the mean distance
+    from the start after ``T`` in box units (``R_hat`` times the reference distance ``v_s T``)."""
+    names = [str(rec["input_policy"]), "naive", "sto", str(rec["input_trained"])]
+    ref = float(rec["reference_distance"])
+    out = {}
+    for name, r in zip(names, np.asarray(rec["R_hat"], dtype=float), strict=True):
+        out[name] = {"R_hat": float(r.mean()), "R_hat_sem": _std(r) / math.sqrt(r.size),
+                     "distance_L": float(r.mean() * ref), "n_swimmers": int(r.size)}
+    return out
+
+
+def replay_markdown(summary: dict[str, dict], store: str) -> str:
+    """The replay record's table (the numbers of videos 5, 10)."""
+    rows = [[k, f"{v['R_hat']:.3f} ± {v['R_hat_sem']:.3f}", f"{v['distance_L']:.2f}",
+             str(v["n_swimmers"])] for k, v in summary.items()]
+    return (f"Replay record (videos 5, 10; Fig. dnsFlow(a)): held-out run {store}, one start "
+            "time, the same initial conditions for every strategy; ± SEM over swimmers.\n\n"
+            + markdown_table(["strategy", "R̂", "mean distance after T / L", "swimmers"], rows))
+
+
 # -- the figure ----------------------------------------------------------------------------------
 def _glyphs(ax, path: np.ndarray, theta: np.ndarray, lam: np.ndarray, every: int,
             size: float) -> int:
@@ -257,25 +321,29 @@ def _glyphs(ax, path: np.ndarray, theta: np.ndarray, lam: np.ndarray, every: int
 
 def fig_dns_flow(rec: dict | None, pdfs: dict | None, transfer: dict[str, dict] | None,
                  path: Path, glyph_window: float = 20.0, glyph_every: float = 2.0,
-                 title: str = "", dns_trained: str = "pretrained/dns",
-                 curve: dict[str, np.ndarray] | None = None) -> dict:
-    """(a) vorticity, trajectory and glyphs; (b) PDFs; (c) transfer ratios; (d), (e) the
-    DNS-trained policy's maps; (f) its training curve. Panels whose record is None say so
-    instead (or, for (f), stay empty)."""
+                 title: str = "", dns_trained: Sequence[str] = ("policy(pretrained/dns)",),
+                 curves: dict[str, dict[str, np.ndarray]] | None = None) -> dict:
+    """(a) vorticity, trajectory and glyphs; (b) PDFs; (c) transfer ratios (``dns_trained``:
+    the labels of the DNS-trained runs); (d), (e) the shipped DNS-trained policy's maps; (f)
+    the DNS-trained runs' training curves (``{name: curves.csv columns}``). Panels whose
+    record is None say so instead (or, for (f), stay empty)."""
     plt = pyplot()
     fig, axes = plt.subplots(2, 3, figsize=(14, 8.6))
     (a, b, c), (d, e, f) = axes
     drawn: dict = {}
-    if curve:
-        x, y, err = (np.asarray(curve[k], dtype=float) for k in
-                     ("frames", "eval/R_hat", "eval/R_hat_sem"))
-        keep = np.isfinite(y)
-        f.errorbar(x[keep] / 1e6, y[keep], yerr=np.nan_to_num(err[keep]), color="k", marker="o",
-                   capsize=3)
+    if curves:
+        drawn["f"] = {}
+        for name, curve in curves.items():
+            x, y, err = (np.asarray(curve[k], dtype=float) for k in
+                         ("frames", "eval/R_hat", "eval/R_hat_sem"))
+            keep = np.isfinite(y)
+            f.errorbar(x[keep] / 1e6, y[keep], yerr=np.nan_to_num(err[keep]), marker="o",
+                       ms=3, capsize=2, label=name)
+            drawn["f"][name] = y[keep].tolist()
         f.set_xlabel("training frames / $10^6$")
-        f.set_ylabel(r"$\hat R$ (evaluation in the training run)")
-        f.set_title("(f) training of the DNS-trained policy", fontsize=8)
-        drawn["f"] = y[keep].tolist()
+        f.set_ylabel(r"$\hat R$, periodic held-out evaluation")
+        f.set_title("(f) training of the DNS-trained policies", fontsize=8)
+        f.legend(fontsize=6, loc="lower right")
     else:
         f.axis("off")
     if rec is not None:
@@ -333,7 +401,7 @@ def fig_dns_flow(rec: dict | None, pdfs: dict | None, transfer: dict[str, dict] 
         b.text(0.5, 0.5, "no pooled PDFs (swimrl-dns-plots)", ha="center", transform=b.transAxes)
     b.set_title("(b) gradient PDFs, pooled over the stored runs", fontsize=8)
     if transfer:
-        drawn["c"] = _draw_transfer(c, transfer, StrategyLabel.policy(dns_trained).label)
+        drawn["c"] = _draw_transfer(c, transfer, tuple(dns_trained))
     else:
         c.text(0.5, 0.5, "no transfer records", ha="center", transform=c.transAxes)
     fig.suptitle(title, fontsize=8)
@@ -342,7 +410,7 @@ def fig_dns_flow(rec: dict | None, pdfs: dict | None, transfer: dict[str, dict] 
     return drawn
 
 
-def _draw_transfer(ax, summary: dict[str, dict], dns_label: str) -> dict:
+def _draw_transfer(ax, summary: dict[str, dict], dns_labels: tuple[str, ...]) -> dict:
     series: dict[str, list[tuple[float, float, float]]] = {"smart": [], "minimal": []}
     lines, other = {}, []
     for label, s in summary.items():
@@ -352,7 +420,9 @@ def _draw_transfer(ax, summary: dict[str, dict], dns_label: str) -> dict:
         if ku is not None and name in ("policy", "minimal"):
             kind = "minimal" if name == "minimal" else "smart"
             series[kind].append((ku, s["ratio"], 0.0 if math.isnan(err) else err))
-        elif label == dns_label or name in ("naive", "minimal"):
+        elif label in dns_labels:
+            continue
+        elif name in ("naive", "minimal"):
             lines[label] = s
         elif label != "sto":
             other.append(label)
@@ -365,15 +435,19 @@ def _draw_transfer(ax, summary: dict[str, dict], dns_label: str) -> dict:
             k, r, e = np.array(sorted(pts)).T
             ax.errorbar(k, r, yerr=e, capsize=3, **styles[kind])
     ax.axhline(1.0, color=COLORS["STO"], lw=1.5, label="STO")
+    trained = [summary[t]["ratio"] for t in dns_labels if t in summary]
+    if trained:
+        mean = float(np.mean(trained))
+        ax.axhline(mean, color="k", ls=":", lw=1.5,
+                   label=f"trained in the DNS ({len(trained)} runs)")
+        if len(trained) > 1:
+            err = _std(np.asarray(trained))
+            ax.axhspan(mean - err, mean + err, color="0.88", zorder=0)
+        lines["trained in the DNS"] = {"ratio": mean}
     for label, s in lines.items():
-        if label == dns_label:
-            ax.axhline(s["ratio"], color="k", ls=":", lw=1.5, label="trained in the DNS")
-            err = s["ratio_realisation_std"]
-            if not math.isnan(err):
-                ax.axhspan(s["ratio"] - err, s["ratio"] + err, color="0.88", zorder=0)
-        elif label.startswith("naive"):
+        if label.startswith("naive"):
             ax.axhline(s["ratio"], color=COLORS["naive"], lw=1, label=label)
-        else:
+        elif label.startswith("minimal"):
             ax.axhline(s["ratio"], color="tab:purple", lw=1, ls="-.", label=label)
     ax.set_xscale("log")
     ax.set_xlabel("Ku of training")
@@ -405,17 +479,31 @@ def build_dns_flow(cfg: FiguresConfig) -> dict:
         title = (f"(a) held-out DNS run {rec['input_store']}, smart = {rec['input_policy']}; "
                  f"(c) smart = the shipped policies, minimal = fits to them; (d, e) "
                  f"{rec['input_trained']} on {rec['input_n_swimmers']} swimmers x 1 start")
-    curve = read_curves(dns.curve) if dns.curve and Path(dns.curve).exists() else None
+    if rec is not None:
+        out_replay = replay_summary(rec)
+        atomic_write_text(cfg.out / "dnsFlow_replay.md",
+                          replay_markdown(out_replay, str(rec["input_store"])))
+    curves = {Path(c).parent.name: read_curves(c) for c in dns.curves if Path(c).exists()}
+    labels = tuple(StrategyLabel.policy(t).label for t in dns.trained_seeds)
     out = fig_dns_flow(rec, pdfs, summary, cfg.out / "dnsFlow.png", dns.glyph_window,
-                       dns.glyph_every, title, dns.trained, curve)
+                       dns.glyph_every, title, labels, curves)
+    if rec is not None:
+        out["replay"] = out_replay
     if summary:
         out["transfer"] = summary
-        atomic_write_text(cfg.out / "dnsFlow_transfer.md", transfer_markdown(summary))
+        text = transfer_markdown(summary)
+        transferred = StrategyLabel.policy(dns.policy).label
+        if transferred in per and all(t in per for t in labels):
+            out["trained_ratio"] = trained_ratio(per, transferred, labels)
+            text += "\n" + trained_ratio_markdown(out["trained_ratio"],
+                                                   realisation_names(dns.transfer))
+        atomic_write_text(cfg.out / "dnsFlow_transfer.md", text)
     elif stale:
         atomic_write_text(cfg.out / "dnsFlow_transfer.md", f"Pending: {stale}\n")
     missing = [why] if why else []
     missing += [f"no pooled_pdfs in {dns.checks}"] if not pdfs else []
     missing += [f"no comparison.json under {dns.transfer}"] if not (summary or stale) else []
+    missing += [f"no training curve {portable(c)}" for c in dns.curves if not Path(c).exists()]
     if missing:
         out["pending"] = "; ".join(missing)
     return out

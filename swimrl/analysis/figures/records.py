@@ -106,9 +106,13 @@ class DNSFiguresConfig:
     policy: str
     """The smart policy of (a) and the videos (the paper's video 5: trained at Ku = 10)."""
     trained: str
-    """The policy trained in the DNS: the dotted line of (c) and the maps of (d), (e)."""
-    curve: Path | None
-    """``curves.csv`` of its training run: (f), its evaluation R_hat against frames."""
+    """The shipped policy trained in the DNS: the maps of (d), (e)."""
+    trained_seeds: tuple[str, ...]
+    """Every DNS-trained run of the transfer records (policy specs, ``trained`` among them):
+    the dotted line of (c) (their mean ratio to STO, band: std over them) and the ratio
+    ``policy`` / DNS-trained per held-out realisation with its spread over them."""
+    curves: tuple[Path, ...]
+    """``curves.csv`` of their training runs: (f), the held-out R_hat against frames."""
     n_swimmers: int
     """Swimmers per strategy."""
     n_traj: int
@@ -123,6 +127,11 @@ class DNSFiguresConfig:
     def __post_init__(self) -> None:
         for name in ("policy", "trained"):
             object.__setattr__(self, name, str(getattr(self, name)))
+        object.__setattr__(self, "trained_seeds", tuple(str(t) for t in self.trained_seeds))
+        if self.trained not in self.trained_seeds:
+            raise ConfigError(f"dns.trained={self.trained!r} is invalid: allowed one of "
+                              f"dns.trained_seeds={list(self.trained_seeds)}")
+        object.__setattr__(self, "curves", tuple(Path(c) for c in self.curves))
         as_int("dns.n_swimmers", self.n_swimmers, low=1)
         as_int("dns.n_traj", self.n_traj, low=1)
         if self.decode_n is not None:
