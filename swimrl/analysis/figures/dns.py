@@ -10,12 +10,13 @@ records (``swimrl-figures``).
   over the stored runs, from ``dns_checks.json`` of ``swimrl-dns-plots``;
 * (d), (e) ``<Lambda | S_np, n_theta>`` and ``<Lambda | S_np, omega>`` of the DNS-trained
   policy (``dns.trained``) on the same replay (the paper's (d), (e));
-* (f) the DNS-trained policy's evaluation ``R_hat`` during its training (its ``curves.csv``);
+* (f) the DNS-trained runs' periodic held-out ``R_hat`` during training (``dns.curves``);
 * (c) the transfer: ``R_hat / R_hat_STO`` of the policies trained at each Ku and of the
   minimal model with the coefficients fitted at each Ku, against that Ku; the DNS-trained
-  policy (``dns.policy``) and naive as horizontal lines. All strategies run on the same
-  flows (a flow = one held-out realisation and start time) and the same swimmers' initial
-  conditions; the point is the paired ratio of the means over all flows, the bars the
+  runs (``dns.trained_seeds``: the mean of their ratios, band: the std over them) and naive
+  as horizontal lines. All strategies run on the same flows (a flow = one held-out
+  realisation and start time; ``swimrl-compare compare.shared_flows=true``, each strategy
+  with its own swimmers); the point is the paired ratio of the means over all flows, the bars the
   standard deviation over independent realisations of each realisation's own ratio (start
   times of one stored run overlap, so their spread would understate it).
 
