@@ -17,7 +17,7 @@ from swimrl.errors import ConfigError
 from swimrl.evaluation.compare import compare
 from swimrl.flows.stochastic import StochasticFlow
 from swimrl.physics.energy import drag_factor
-from swimrl.policies.baselines import NaiveShape, ShortTimeOptimal, as_actor
+from swimrl.policies.baselines import NaiveShape, ShortTimeOptimal, StrategyLabel, as_actor
 from swimrl.task import RewardSpec, TaskSpec
 
 from .conftest import SMALL
@@ -190,7 +190,7 @@ def test_displacement_reproduces_the_recorded_r_hat(compose_cfg, case):
     ref = json.loads(REFERENCE.read_text())["cases"][case]
     closed = {k: v for k, v in ref["per_flow"].items() if not k.startswith("policy")}
     over = [o for o in ref["overrides"] if not o.startswith("compare.strategies")]
-    strategies = ",".join(k.split("(")[0] for k in closed)
+    strategies = ",".join(StrategyLabel.parse(k).name for k in closed)
     for extra in ([], ["task=displacement"]):
         cfg = compose_cfg(["threads=1", "eval.progress=false", *over,
                            f"compare.strategies=[{strategies}]", *extra], name="compare")

@@ -101,6 +101,11 @@ def shipped_before_pending(dns: DNSFiguresConfig) -> str:
                             transfer=portable(dns.transfer)))
 
 
+def replay_strategies(policy: str, trained: str) -> list[str]:
+    """The replay record's strategies, in its order: smart, naive, STO, the DNS-trained one."""
+    return [policy, "naive", "sto", trained]
+
+
 def spheroid_aspect(shape_factor: np.ndarray) -> np.ndarray:
     """Aspect ratio ``a = ((1 + Lambda) / (1 - Lambda))^{1/2}`` (inverse of
     ``Lambda = (a^2 - 1) / (a^2 + 1)``)."""
@@ -126,7 +131,7 @@ def make_record(cfg: FiguresConfig, dns: DNSFiguresConfig) -> dict[str, np.ndarr
     sizes = EvalSizes(1, dns.n_swimmers, 1, cfg.progress, dns.n_swimmers)
     setup = EvalSetup(flow=spec, params=cfg.params, runtime=cfg.runtime, sizes=sizes,
                       seed=cfg.seed, record={})
-    a = record_strategies(setup, [dns.policy, "naive", "sto", dns.trained], "DNS", FRAME_EVERY)
+    a = record_strategies(setup, replay_strategies(dns.policy, dns.trained), "DNS", FRAME_EVERY)
     box = float(a["box"])
     maps = {}  # the DNS-trained policy's maps (d), (e), as float32
     for other, (mean, (x, y)) in lambda_maps(a["signals"][0, 3], a["Lambda"][0, 3]).items():
@@ -180,13 +185,19 @@ def dns_record(cfg: FiguresConfig, dns: DNSFiguresConfig) -> tuple[dict | None, 
 
 
 # -- (c) the transfer ----------------------------------------------------------------------------
+def transfer_records(root: Path) -> list[Path]:
+    """The ``comparison.json`` files under ``root``, one per held-out realisation, in the
+    order every transfer reader uses."""
+    return sorted(Path(root).rglob(RunLayout(root).comparison.name))
+
+
 def read_transfer(root: Path) -> dict[str, np.ndarray]:
     """Per-flow ``R_hat`` of each strategy label over every ``comparison.json`` under
     ``root`` (one per held-out realisation), concatenated over realisations:
     ``{label: (flows,)}``, plus ``realisation`` (the index of each flow's record)."""
     per: dict[str, list[np.ndarray]] = {}
     which: list[np.ndarray] = []
-    for i, path in enumerate(sorted(Path(root).rglob(RunLayout(root).comparison.name))):
+    for i, path in enumerate(transfer_records(root)):
         rec = json.loads(path.read_text())
         for row in rec["rows"]:
             per.setdefault(row["label"], []).append(np.asarray(row["per_flow"], dtype=float))
@@ -205,6 +216,12 @@ def _std(x: np.ndarray) -> float:
     return float(np.std(x, ddof=1)) if np.size(x) > 1 else math.nan
 
 
+def realisation_ratios(num: np.ndarray, den: np.ndarray, real: np.ndarray) -> np.ndarray:
+    """``<num>_i / <den>_i`` for each realisation ``i`` (means over its flows, the same flows
+    for both)."""
+    return np.array([num[real == i].mean() / den[real == i].mean() for i in np.unique(real)])
+
+
 def transfer_summary(per: dict[str, np.ndarray], reference: str = "sto") -> dict[str, dict]:
     """Per label: ``R_hat`` (mean and std over flows), the paired ratio of its mean to the
     ``reference``'s over all flows with its delta-method SEM (``ratio``, ``ratio_sem``, as
@@ -216,8 +233,7 @@ def transfer_summary(per: dict[str, np.ndarray], reference: str = "sto") -> dict
         if label == "realisation":
             continue
         ratio, sem = paired_ratio(r, ref)
-        by_real = np.array([r[real == i].mean() / ref[real == i].mean()
-                            for i in np.unique(real)])
+        by_real = realisation_ratios(r, ref, real)
         out[label] = {"R_hat": float(r.mean()), "R_hat_std": _std(r),
                       "ratio": ratio, "ratio_sem": sem,
                       "ratio_realisations": by_real.tolist(),
@@ -250,8 +266,7 @@ def trained_ratio(per: dict[str, np.ndarray], transferred: str,
     runs ``k``, and per run its ratio over all flows."""
     real = per["realisation"]
     num = per[transferred]
-    runs = np.array([[num[real == i].mean() / per[t][real == i].mean() for i in np.unique(real)]
-                     for t in trained])  # (runs, realisations)
+    runs = np.array([realisation_ratios(num, per[t], real) for t in trained])  # (runs, real.)
     overall = [float(num.mean() / per[t].mean()) for t in trained]
     return {"transferred": transferred, "trained": list(trained),
             "per_realisation": runs.T.tolist(),
@@ -264,7 +279,7 @@ def trained_ratio(per: dict[str, np.ndarray], transferred: str,
 def realisation_names(root: Path) -> list[str]:
     """The held-out realisations of :func:`read_transfer` in its order: the directory of
     each ``comparison.json`` under ``root``."""
-    return [p.parent.name for p in sorted(Path(root).rglob(RunLayout(root).comparison.name))]
+    return [p.parent.name for p in transfer_records(root)]
 
 
 def trained_ratio_markdown(r: dict, names: Sequence[str] | None = None) -> str:
@@ -282,10 +297,10 @@ def trained_ratio_markdown(r: dict, names: Sequence[str] | None = None) -> str:
 
 
 def replay_summary(rec: dict) -> dict[str, dict]:
-    """The replay record's strategies (``input_policy``, naive, STO, ``input_trained``, the
-    order of :func:`make_record`): ``R_hat`` (mean, SEM over swimmers) and the mean distance
-    from the start after ``T`` in box units (``R_hat`` times the reference distance ``v_s T``)."""
-    names = [str(rec["input_policy"]), "naive", "sto", str(rec["input_trained"])]
+    """The replay record's strategies (:func:`replay_strategies`): ``R_hat`` (mean, SEM over
+    swimmers) and the mean distance from the start after ``T`` in box units (``R_hat`` times
+    the reference distance ``v_s T``)."""
+    names = replay_strategies(str(rec["input_policy"]), str(rec["input_trained"]))
     ref = float(rec["reference_distance"])
     out = {}
     for name, r in zip(names, np.asarray(rec["R_hat"], dtype=float), strict=True):
@@ -480,16 +495,14 @@ def build_dns_flow(cfg: FiguresConfig) -> dict:
         title = (f"(a) held-out DNS run {rec['input_store']}, smart = {rec['input_policy']}; "
                  f"(c) smart = the shipped policies, minimal = fits to them; (d, e) "
                  f"{rec['input_trained']} on {rec['input_n_swimmers']} swimmers x 1 start")
-    if rec is not None:
-        out_replay = replay_summary(rec)
-        atomic_write_text(cfg.out / "dnsFlow_replay.md",
-                          replay_markdown(out_replay, str(rec["input_store"])))
     curves = {Path(c).parent.name: read_curves(c) for c in dns.curves if Path(c).exists()}
     labels = tuple(StrategyLabel.policy(t).label for t in dns.trained_seeds)
     out = fig_dns_flow(rec, pdfs, summary, cfg.out / "dnsFlow.png", dns.glyph_window,
                        dns.glyph_every, title, labels, curves)
     if rec is not None:
-        out["replay"] = out_replay
+        out["replay"] = replay_summary(rec)
+        atomic_write_text(cfg.out / "dnsFlow_replay.md",
+                          replay_markdown(out["replay"], str(rec["input_store"])))
     if summary:
         out["transfer"] = summary
         text = transfer_markdown(summary)
