@@ -435,7 +435,7 @@ def fig_ku_inf(smart: dict[str, np.ndarray], path: Path, title: str = "",
         a.set_xlabel(r"$S_{np}\tau_K$")
         a.set_ylabel(r"$\omega\tau_K$")
         # two significant digits: the exact count follows chaotic float32 trajectories and
-        # differs between machines (docs/reliability.md); the record holds the totals
+        # differs between machines (docs/reliability.md); the record holds the total count
         n = int(smart[f"map_{name}_count"].sum())
         a.set_title(f"({'bc'[i]}) {label}, {n:.2g} decisions", fontsize=9)
         out["bc"[i]] = mean
