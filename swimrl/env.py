@@ -22,7 +22,8 @@ energy costs (:mod:`swimrl.task`). Episodes are truncated when their flow has ru
 Partial resets (``_reset`` mask ``(F, S, 1)``) start new swimmers at uniformly random
 positions and orientations (and targets); a flow whose swimmers all reset also gets a new
 realisation, and a swimmer started in a running flow ends with it (the flow's clock
-truncates every episode in it, so the flows of a batch renew together).
+truncates every episode in it, so the flows of a batch renew together, or in
+:meth:`~SwimmerEnv.stagger`'s groups).
 With ``ic_blocks = B > 1`` the ``S`` swimmers of a flow are ``B`` blocks of ``S / B`` that
 start from the same positions and orientations (common random numbers: one block per
 strategy in a paired comparison); the draws are those of an environment of ``S / B``
@@ -72,7 +73,38 @@ class EnvParams:
     ``[-Lambda_max, Lambda_max]``, from which actors and baselines read it. ``task`` and
     ``reward``: :mod:`swimrl.task`. The defaults (for library calls) are the configs'
     ``swimmer.*``, ``episode.*``, ``signals=all``, ``task=displacement`` and ``reward.*``
-    (``tests/test_config_sources.py``).
+    (``tests/test_config_sources.py``): ``EnvParams()`` is the paper's swimmer and episode.
+    A value out of range raises :class:`~swimrl.errors.ConfigError` naming its config key.
+
+    Parameters
+    ----------
+    swim_speed
+        ``v_s / u_rms`` (``swimmer.swim_speed``; the paper: 0.707).
+    rot_diffusion
+        Rotational diffusion ``D_r tau_K`` (``swimmer.rot_diffusion``; 0: none).
+    duration
+        Episode length ``T / tau_K`` (``episode.duration``; the paper: 200).
+    update_interval
+        Decision interval ``T_u / tau_K`` (``episode.update_interval``; the paper: 0.1).
+    dt
+        Heun step ``dt / tau_K`` (``episode.dt``; the paper: 0.01); ``update_interval / dt``
+        and ``duration / update_interval`` must be integers.
+    shape_factor_max
+        ``Lambda_max`` in ``(0, 1)`` (``swimmer.shape_factor_max``; the paper: 0.98).
+    signals
+        The signals the policy observes, a subset of
+        :data:`~swimrl.physics.signals.SIGNAL_NAMES` in that order (``signals.names``).
+    task
+        The task (``task.*``): displacement (the paper's) or target.
+    reward
+        The energy costs added to the reward (``reward.*``; none by default).
+
+    Attributes
+    ----------
+    n_substeps : int
+        Heun steps per decision, ``T_u / dt`` (10).
+    n_decisions : int
+        Decisions per episode, ``N = T / T_u`` (2000).
     """
 
     swim_speed: float = 0.707
@@ -119,7 +151,42 @@ class EnvParams:
 
 class SwimmerEnv(EnvBase):
     """Shape-changing spheroidal swimmers maximising their distance from the start point
-    (``task=displacement``) or reaching a target (``task=target``)."""
+    (``task=displacement``) or reaching a target (``task=target``).
+
+    A TorchRL ``EnvBase`` of batch ``(n_flows, n_swimmers)``; one step is one decision
+    interval (module docstring for the keys). Usually made by :meth:`build` from a flow
+    spec; the constructor takes a flow already built (any
+    :class:`~swimrl.flows.base.GriddedFlow`, ``docs/extending.md``).
+
+    Parameters
+    ----------
+    flow
+        ``n_flows`` realisations of a flow; the batch's first dimension.
+    n_swimmers
+        Swimmers per flow, the batch's second dimension.
+    params
+        Swimmer and episode parameters.
+    generator
+        The random generator of initial conditions, flows and noise (default: the flow's,
+        else a new one).
+    kernel
+        The integration kernel: ``auto`` | ``eager`` | ``fused`` | ``compiled``
+        (:func:`~swimrl.physics.integrator.select_kernel`).
+    ic_blocks
+        Blocks of ``n_swimmers / ic_blocks`` swimmers per flow with identical initial
+        conditions (common random numbers for paired comparisons).
+
+    Examples
+    --------
+    A shipped policy over one episode, with TorchRL's ``rollout``:
+
+    >>> from swimrl import EnvParams, Runtime, StochasticSpec, SwimmerEnv, load_policy
+    >>> params = EnvParams()
+    >>> env = SwimmerEnv.build(StochasticSpec(kubo=10.0), params,
+    ...                        Runtime.from_names("cpu", "float32", 1), 2, 100, seed=0)
+    >>> td = env.rollout(params.n_decisions, load_policy("pretrained/ku10", params))
+    >>> r_hat = env.score(td[..., -1]["next"])          # (2, 100)
+    """
 
     def __init__(
         self,
@@ -180,6 +247,8 @@ class SwimmerEnv(EnvBase):
         #: Upper bound of ``max_x |u(x, t)|`` of each flow since its last reset, ``(F,)``.
         self.max_flow_speed = torch.zeros(flow.n_flows, device=dev, dtype=dtype)
         self._flows = torch.arange(flow.n_flows, device=dev)
+        #: Clock offsets ``(F,)`` added at the next reset of the flows (:meth:`stagger`).
+        self._clock_offset: torch.Tensor | None = None
         lam = params.shape_factor_max
         self.action_spec = Bounded(low=-lam, high=lam, shape=batch + (1,), device=dev, dtype=dtype)
         self.observation_spec = Composite(
@@ -214,7 +283,30 @@ class SwimmerEnv(EnvBase):
     ) -> SwimmerEnv:
         """Environment of ``n_flows x n_swimmers`` swimmers in new realisations of ``flow``;
         all randomness (flows, initial conditions, noise) from ``seed``; ``ic_blocks`` blocks
-        of swimmers per flow with identical initial conditions."""
+        of swimmers per flow with identical initial conditions.
+
+        Parameters
+        ----------
+        flow
+            The flow: :class:`~swimrl.flows.build.StochasticSpec` (the paper's),
+            :class:`~swimrl.flows.build.StoredRunSpec` (stored DNS runs) or
+            :class:`~swimrl.flows.build.LiveDNSSpec`.
+        params
+            Swimmer and episode parameters.
+        runtime
+            Device, dtype and integration kernel (its threads are not applied here).
+        n_flows, n_swimmers
+            The batch shape.
+        seed
+            Seeds the one generator of the flows, the initial conditions and the noise.
+        ic_blocks
+            Blocks of swimmers per flow that start from the same positions and orientations.
+
+        Returns
+        -------
+        SwimmerEnv
+            The environment, not reset yet (TorchRL's ``reset`` or ``rollout`` does it).
+        """
         device, dtype = runtime.device, runtime.dtype
         gen = torch.Generator(device=device).manual_seed(int(seed))
         realisations = build_flow(
@@ -223,13 +315,33 @@ class SwimmerEnv(EnvBase):
         return cls(realisations, n_swimmers, params, generator=gen, kernel=runtime.kernel,
                    ic_blocks=ic_blocks)
 
+    def stagger(self, groups: int) -> None:
+        """Offset the episodes of ``groups`` groups of flows (flow ``f`` in group ``f mod
+        groups``) by ``N / groups`` decisions from each other: at the next reset, the clock
+        of a flow of group ``g`` starts at ``g floor(N / groups)``, so its first episode is
+        that much shorter and its later episodes end (and its flow is redrawn) a fixed
+        fraction of an episode after the previous group's. A training env's episode ends
+        then redraw ``1/groups`` of the flows at a time instead of all at once, and a batch
+        holds flows at ``groups`` phases of their episodes. ``groups = 1``: no offset."""
+        if groups < 1 or groups > self.flow.n_flows:
+            raise ValueError(f"groups={groups} must be in [1, n_flows={self.flow.n_flows}]")
+        step = self.params.n_decisions // groups
+        offset = (self._flows % groups) * step
+        self._clock_offset = offset if groups > 1 else None
+
     # -- state helpers ------------------------------------------------------------------------
     @property
     def n_swimmers(self) -> int:
         return self.batch_size[1]
 
     def displacement(self) -> torch.Tensor:
-        """``x - x_0 = (p - p_0) + L (m - m_0)``, shape ``(F, S, 2)``."""
+        """The unwrapped displacement from the start ``x - x_0 = (p - p_0) + L (m - m_0)``.
+
+        Returns
+        -------
+        torch.Tensor
+            ``(F, S, 2)``, in the flow's length unit.
+        """
         length = self.flow.grid.length
         return (self.pos - self.start_pos) + length * (self.image - self.start_image).to(
             self.pos.dtype
@@ -244,15 +356,38 @@ class SwimmerEnv(EnvBase):
 
     def frame(self, displacement: torch.Tensor | None = None) -> torch.Tensor:
         """The vector whose direction is the signals' ``e_r``: ``x - x_0``
-        (``task=displacement``) or ``X - x``, towards the target (``task=target``);
-        ``(F, S, 2)``."""
+        (``task=displacement``) or ``X - x``, towards the target (``task=target``).
+
+        A new task overrides it (``docs/extending.md``).
+
+        Parameters
+        ----------
+        displacement
+            ``x - x_0`` if already at hand, ``(F, S, 2)``.
+
+        Returns
+        -------
+        torch.Tensor
+            ``(F, S, 2)``.
+        """
         if displacement is None:
             displacement = self.displacement()
         return self.target - displacement if self.task.target else displacement
 
     def signals(self, displacement: torch.Tensor | None = None) -> torch.Tensor:
-        """All five signals at the current state, ``(F, S, 5)``, in the task's frame
-        (:meth:`frame`; ``displacement``: ``x - x0`` if already at hand)."""
+        """All five signals at the current state, in the task's frame (:meth:`frame`).
+
+        Parameters
+        ----------
+        displacement
+            ``x - x_0`` if already at hand, ``(F, S, 2)``.
+
+        Returns
+        -------
+        torch.Tensor
+            ``(F, S, 5)``, in the order of :data:`~swimrl.physics.signals.SIGNAL_NAMES`
+            (:func:`~swimrl.physics.signals.compute_signals`).
+        """
         q = self.flow.sample(self._flow_index, self.pos.view(-1, 2))
         return compute_signals(q.view(*self.batch_size, 5), self.theta,
                                self.frame(displacement), self.tau_k)
@@ -277,19 +412,36 @@ class SwimmerEnv(EnvBase):
         return TensorDict(out, batch_size=self.batch_size, device=self.device)
 
     def score(self, td: TensorDictBase) -> torch.Tensor:
-        """The performance index of every swimmer in ``td`` (an observation), ``(F, S)``:
-        the undiscounted task return over ``v_s T`` (no energy cost), ``|x - x_0| / (v_s T)``
-        or ``(D - |X - x|) / (v_s T)``."""
+        """The performance index of every swimmer in ``td`` (an observation): the undiscounted
+        task return over ``v_s T`` (no energy cost), ``R_hat = |x - x_0| / (v_s T)`` (the
+        paper's eq. 6) or ``(D - |X - x|) / (v_s T)``.
+
+        Parameters
+        ----------
+        td
+            An observation, e.g. ``td[..., -1]["next"]`` of a rollout: the state after the
+            last decision.
+
+        Returns
+        -------
+        torch.Tensor
+            ``(F, S)``.
+        """
         if self.task.target:
             remaining = td.get("target_distance").squeeze(-1)
             return (self.target_distance - remaining) / self.reference_distance
         return td.get("distance").squeeze(-1) / self.reference_distance
 
     def outcomes(self) -> dict[str, torch.Tensor]:
-        """Per-swimmer results besides :meth:`score`, ``(F, S)`` each: ``energy``
-        (``E_hat``) and, for ``task=target``, ``arrived`` (0/1), ``arrival_time`` (units
-        ``tau_K``; NaN where not arrived) and ``final_distance`` (``|X - x|``, units
-        ``ell_f``)."""
+        """Per-swimmer results besides :meth:`score`.
+
+        Returns
+        -------
+        dict[str, torch.Tensor]
+            ``(F, S)`` each: ``energy`` (``E_hat``, :mod:`swimrl.physics.energy`) and, for
+            ``task=target``, ``arrived`` (0/1), ``arrival_time`` (units ``tau_K``; NaN where
+            not arrived) and ``final_distance`` (``|X - x|``, units ``ell_f``).
+        """
         out = {"energy": self.energy.clone()}
         if self.task.target:
             time = self.arrival_step.to(self.energy.dtype) * self.params.update_interval
@@ -311,6 +463,9 @@ class SwimmerEnv(EnvBase):
             self.flow.reset(flows)
             self.max_flow_speed[flows] = 0
             self.flow_step[flows] = 0
+            if self._clock_offset is not None:  # stagger(): once, at the first reset
+                self.flow_step.add_(torch.where(flows, self._clock_offset, 0))
+                self._clock_offset = None
         k = int(mask.sum())
         if k:
             g, dev, dt = self.generator, self.device, self.pos.dtype
@@ -367,20 +522,20 @@ class SwimmerEnv(EnvBase):
         ``rho <= task.arrival_radius``."""
         moving = ~self.arrived
         rho_before = (self.target - self.displacement()).norm(dim=-1)
-        frozen = None if bool(moving.all()) else (self.pos.clone(), self.image.clone(),
-                                                  self.theta.clone())
+        # the arrived swimmers' state put back after the interval, with no branch on whether
+        # there are any (a branch on a tensor value would wait for the device)
+        frozen = (self.pos.clone(), self.image.clone(), self.theta.clone())
         self.integrate(action)
-        if frozen is not None:
-            keep = self.arrived.unsqueeze(-1)
-            self.pos.copy_(torch.where(keep, frozen[0], self.pos))
-            self.image.copy_(torch.where(keep, frozen[1], self.image))
-            self.theta.copy_(torch.where(self.arrived, frozen[2], self.theta))
+        keep = self.arrived.unsqueeze(-1)
+        self.pos.copy_(torch.where(keep, frozen[0], self.pos))
+        self.image.copy_(torch.where(keep, frozen[1], self.image))
+        self.theta.copy_(torch.where(self.arrived, frozen[2], self.theta))
         self.step_count += 1
         self.flow_step += 1
         rho = (self.target - self.displacement()).norm(dim=-1)
         now = moving & (rho <= self.arrival_radius)
         self.arrived |= now
-        self.arrival_step[now] = self.step_count[now]
+        self.arrival_step.copy_(torch.where(now, self.step_count, self.arrival_step))
         cost = self._cost(action.view(self.batch_size), moving)
         reward = torch.where(moving, rho_before - rho, torch.zeros_like(rho))
         out = self._observe()
@@ -404,7 +559,17 @@ class SwimmerEnv(EnvBase):
         return torch.where(moving, cost, zero)
 
     def integrate(self, shape_factor: torch.Tensor) -> None:
-        """Advance all swimmers and flows by one decision interval with ``Lambda`` held fixed."""
+        """Advance all swimmers and flows by one decision interval with ``Lambda`` held fixed.
+
+        ``T_u / dt`` Heun steps of the paper's eqs. (1a) and (2) by the environment's kernel
+        (:mod:`swimrl.physics.integrator`). A new swimmer model overrides it
+        (``docs/extending.md``).
+
+        Parameters
+        ----------
+        shape_factor
+            ``Lambda`` of every swimmer, ``(F * S,)``.
+        """
         k = self.params.n_substeps
         path = self.flow.coefficient_path(k, self.dt)
         bound = self.flow.speed_bound(path)[self.flow.rows(self._flows)]

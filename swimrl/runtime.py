@@ -65,9 +65,10 @@ def check_memory(need: int, device: torch.device, key: str, value, what: str) ->
 @dataclass(frozen=True)
 class Runtime:
     """``device``, ``dtype`` (``float32`` | ``float64``), ``threads`` (None: all cores) and
-    ``kernel`` (``auto`` | ``eager`` | ``fused``), checked on construction. The default
-    ``kernel`` is the configs' (``tests/test_config_sources.py``); ``threads`` differs between
-    commands (``conf/evaluate.yaml``: all cores, ``conf/train.yaml``: 1) and has none."""
+    ``kernel`` (``auto`` | ``eager`` | ``fused`` | ``compiled``), checked on construction.
+    The default ``kernel`` is the configs' (``tests/test_config_sources.py``); ``threads``
+    differs between commands (``conf/evaluate.yaml``: all cores, ``conf/train.yaml``: 1)
+    and has none."""
 
     device: torch.device
     dtype: torch.dtype

@@ -130,3 +130,33 @@ def test_build_env_from_config(compose_cfg):
     td = env.reset()
     assert td["observation"].shape == (2, 3, 2)
     assert torch.equal(td["observation"], td["signals"][..., [1, 3]])
+
+
+def test_staggered_episodes_end_and_redraw_one_group_at_a_time():
+    """``stagger(G)``: flow ``f``'s first episode is ``(f mod G) floor(N/G)`` decisions
+    shorter, so the groups' episodes end (done, then a new realisation of only their flows)
+    ``floor(N/G)`` decisions apart; later episodes keep the full length ``N``."""
+    from torchrl.envs.utils import step_mdp
+
+    env = small_env(n_flows=4, n_swimmers=3, duration=0.8)  # N = 8 decisions
+    n = env.params.n_decisions
+    env.stagger(2)  # flows 0, 2: offset 0; flows 1, 3: offset 4
+    td = env.reset()
+    assert env.flow_step.tolist() == [0, 4, 0, 4]
+    ended = []
+    for i in range(1, 2 * n + 1):
+        td.set("action", env.action_spec.rand())
+        basis = env.flow.basis.clone()
+        td = env.step(td)
+        done = td["next", "done"].squeeze(-1).all(dim=1)
+        if done.any():
+            ended.append((i, done.nonzero().flatten().tolist()))
+        td = step_mdp(td)
+        if done.any():  # the collector's partial reset of the done swimmers
+            td.set("_reset", done[:, None, None].expand(4, 3, 1).clone())
+            td = env.reset(td)
+            redrawn = [not torch.equal(env.flow.basis[f], basis[f]) for f in range(4)]
+            assert redrawn == done.tolist()
+    assert ended == [(4, [1, 3]), (8, [0, 2]), (12, [1, 3]), (16, [0, 2])]
+    with pytest.raises(ValueError, match="groups=5"):
+        env.stagger(5)

@@ -117,7 +117,35 @@ def test_sigterm_stops_training_after_the_update_in_flight_and_resume_finishes(
     assert (out / "metrics.json").is_file() and not RunLayout(out).lock.exists()
 
 
-def test_sigusr1_stops_a_comparison_after_the_chunk_in_flight(compose_cfg, tmp_path):
+#: TINY with a periodic evaluation of 2 flows x 100 000 swimmers (seconds per evaluation)
+BIG_EVAL = [*TINY, "train.eval_every=2", "train.eval_flows=2", "train.eval_swimmers=100000",
+            "eval.flows_per_batch=2"]
+
+
+def test_sigterm_inside_a_periodic_evaluation_checkpoints_at_once_and_resume_makes_it(
+        compose_cfg, tmp_path):
+    """A signal that arrives during an evaluation is answered before the evaluation's next
+    decision (exit 75 within 10 s, one line), the checkpoint marks the evaluation pending and
+    ``resume=true`` makes it first, then finishes the run."""
+    out = tmp_path / "run"
+    proc, log = _start(TRAIN, [*BIG_EVAL, f"hydra.run.dir={out}"], tmp_path)
+    _wait_for(RunLayout(out).periodic_policy(0), proc, log)  # the first evaluation started
+    time.sleep(0.5)
+    t0 = time.monotonic()
+    rc, text = _stop(proc, signal.SIGTERM, log)
+    assert time.monotonic() - t0 < 10, text[-2000:]
+    _preempted(rc, text, r"preempted by SIGTERM during the periodic evaluation after update "
+               r"0/4 \(0 frames\): checkpoint written to \S+; continue with resume=true$")
+    ck = load_file(RunLayout(out).checkpoint)
+    assert ck["counters"]["updates"] == 0 and ck["counters"]["eval_pending"] is True
+    metrics = train(train_config(compose_cfg([*BIG_EVAL, "resume=true"], name="train")), out)
+    assert metrics["training"]["updates"] == 4 and "eval_pending" not in metrics["training"]
+    curve = (out / "curves.csv").read_text().splitlines()
+    evals = [row.split(",")[0] for row in curve[1:] if row.split(",")[1]]
+    assert evals == ["0", "160", "320"], curve
+
+
+def test_sigusr1_stops_a_comparison_inside_the_chunk_in_flight(compose_cfg, tmp_path):
     out = tmp_path / "run"
     proc, log = _start(COMPARE, [*COMPARISON, f"hydra.run.dir={out}"], tmp_path)
     _wait_for(RunLayout(out).comparison_partial, proc, log)  # the first chunk is done

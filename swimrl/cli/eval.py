@@ -4,6 +4,9 @@ r"""``swimrl-eval``: a strategy on fresh flow realisations -> ``metrics.json``.
     swimrl-eval strategy=policy policy=pretrained/ku10 flow.kubo=10
     swimrl-eval strategy=sto eval.record=5    # + trajectories.npz: every decision of 5
                                               #   swimmers per flow
+
+On ``SIGTERM`` or ``SIGUSR1`` it stops before the next decision, writes nothing and exits with
+status 75 (:data:`swimrl.evaluation.jobs.PREEMPTED_EXIT`): the same command runs it again.
 """
 
 from __future__ import annotations
@@ -15,7 +18,12 @@ from omegaconf import DictConfig
 
 from swimrl.cli import command, run_dir
 from swimrl.config import eval_config
-from swimrl.evaluation.jobs import refuse_if_locked, run_lock
+from swimrl.evaluation.jobs import (
+    EvaluationInterruptedError,
+    preemption_signals,
+    refuse_if_locked,
+    run_lock,
+)
 from swimrl.evaluation.records import refuse_overwrite, summary_line, write_json
 from swimrl.evaluation.rollout import Actor, EvalConfig, actor_for, check_eval_memory, evaluate
 from swimrl.evaluation.trajectories import TrajectoryRecorder, save_trajectories
@@ -58,7 +66,12 @@ def main(cfg: DictConfig) -> dict:
         _LOADED.clear()  # a multirun's next job reads its policy file again
         n_record = c.setup.sizes.record
         recorder = TrajectoryRecorder(n_record) if n_record else None
-        metrics = evaluate(c.setup, actor, c.strategy.name, recorder)
+        with preemption_signals() as preemption:
+            try:
+                metrics = evaluate(c.setup, actor, c.strategy.name, recorder, preemption)
+            except EvaluationInterruptedError as exc:
+                preemption.stop(f"after decision {exc.decision} of an episode: nothing "
+                                "written; run the same command again")
         if recorder is not None:
             path = save_trajectories(recorder.arrays(), run.trajectories,
                                      [c.strategy.name], c.setup.record)

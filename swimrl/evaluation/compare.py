@@ -32,7 +32,7 @@ from swimrl.errors import BadFileError, ConfigError, as_bool
 from swimrl.policies.baselines import STRATEGIES, StrategyLabel, StrategySpec
 from swimrl.policies.files import resolve_policy_file, sha256_file
 
-from .jobs import Preemption
+from .jobs import EvaluationInterruptedError, Preemption
 from .records import summary_line, write_json
 from .rollout import Actor, EvalSetup, actor_for, check_chunks, evaluate_shared, flow_chunks
 from .statistics import paired_difference, paired_ratio
@@ -59,7 +59,21 @@ class Variant:
 @dataclass(frozen=True)
 class CompareConfig:
     """``swimrl-compare``: the variants, evaluated on ``setup`` (shared flows or one by one).
-    The defaults are ``conf/compare.yaml``'s (``tests/test_config_sources.py``)."""
+    The defaults are ``conf/compare.yaml``'s (``tests/test_config_sources.py``).
+
+    Parameters
+    ----------
+    setup
+        Flow, swimmer and episode parameters, runtime, sizes and seed of the evaluation.
+    variants
+        The strategies (:func:`strategy_variants` expands ``compare.*`` into them); the
+        first is the reference of the ratios.
+    shared_flows
+        All variants in one environment, each its own block of swimmers per flow, from the
+        same starts (``compare.shared_flows``).
+    overwrite, resume
+        Replace a finished comparison; continue from ``comparison.partial.json``.
+    """
 
     setup: EvalSetup
     variants: tuple[Variant, ...]
@@ -179,9 +193,27 @@ def compare(cfg: CompareConfig, partial: Path | None = None,
     """Evaluate all variants (every policy loaded first) and return the comparison record;
     with ``partial`` (a run directory's ``comparison.partial.json``) the chunk results are
     saved there as they come and, with ``cfg.resume``, the ones already there are reused. A
-    ``preemption`` requested (a signal, :mod:`.jobs`) stops the comparison after the chunk in
-    flight, once ``partial`` holds it (:meth:`~.jobs.Preemption.stop`: exit status
-    :data:`~.jobs.PREEMPTED_EXIT`), unless no chunk is left to do."""
+    ``preemption`` requested (a signal, :mod:`.jobs`) stops the comparison before the next
+    decision of the chunk in flight, whose work is dropped, once ``partial`` holds the
+    finished chunks (:meth:`~.jobs.Preemption.stop`: exit status
+    :data:`~.jobs.PREEMPTED_EXIT`), unless no chunk is left to do.
+
+    Parameters
+    ----------
+    cfg
+        The comparison (``swimrl.config.compare_config`` maps ``swimrl-compare``'s config
+        onto it).
+    partial
+        A run directory's ``comparison.partial.json``, or None.
+    preemption
+        Set by a signal handler to stop between chunks, or None.
+
+    Returns
+    -------
+    dict
+        The comparison record (``comparison.json``): one row per variant with ``R_hat`` per
+        flow, its mean +- SEM and ``ratio_to_first`` paired over flows.
+    """
     setup = cfg.setup
     actors = [actor_for(v.strategy, v.policy, setup.params) for v in cfg.variants]
     n = len(actors)
@@ -224,8 +256,13 @@ def compare(cfg: CompareConfig, partial: Path | None = None,
         stop_if_preempted()
 
         labels = [cfg.variants[i].label for i in g]
-        metrics = evaluate_shared(setup, [actors[i] for i in g], desc=" + ".join(labels),
-                                  done=list(done), on_chunk=None if partial is None else keep)
+        try:
+            metrics = evaluate_shared(setup, [actors[i] for i in g], desc=" + ".join(labels),
+                                      done=list(done), on_chunk=None if partial is None else keep,
+                                      preemption=preemption if partial is not None else None)
+        except EvaluationInterruptedError:
+            stop_if_preempted()
+            raise
         for i, m in zip(g, metrics, strict=True):
             m.update(label=cfg.variants[i].label, strategy=cfg.variants[i].strategy.name)
             results[i] = m

@@ -79,6 +79,16 @@ class Preempted(SystemExit):
         return self.message
 
 
+class EvaluationInterruptedError(Exception):
+    """An evaluation stopped between two decisions because a preemption signal arrived
+    (:attr:`Preemption.requested`); the caller saves what it can and calls
+    :meth:`Preemption.stop`. ``decision``: the decisions completed in the episode."""
+
+    def __init__(self, decision: int):
+        super().__init__(f"evaluation interrupted after decision {decision}")
+        self.decision = decision
+
+
 class RunDirInUseError(FileExistsError):
     """Another process holds the run directory's lock (one line naming it)."""
 

@@ -35,6 +35,7 @@ from swimrl.policies.baselines import StrategySpec, build_strategy
 from swimrl.policies.files import load_policy
 from swimrl.runtime import Runtime, check_memory
 
+from .jobs import EvaluationInterruptedError, Preemption
 from .statistics import chunk_outcomes, flow_statistics, mean_flow_stats, outcome_statistics
 from .trajectories import TrajectoryRecorder
 
@@ -143,14 +144,20 @@ def run_episodes(
     actor,
     progress: tqdm | None = None,
     on_decision: Callable[[int, TensorDictBase], None] | None = None,
+    preemption: Preemption | None = None,
 ) -> torch.Tensor:
     """One full episode of every swimmer of ``env``; returns ``R_hat`` ``(F, S)``
     (:meth:`~swimrl.env.SwimmerEnv.score`; the other outcomes: ``env.outcomes()``).
 
-    ``on_decision(i, td)`` sees decision ``i`` (signals and action) before the step.
+    ``on_decision(i, td)`` sees decision ``i`` (signals and action) before the step. Once
+    ``preemption`` is requested (a signal) the episode stops before the next decision with
+    :class:`~.jobs.EvaluationInterruptedError` (a decision takes milliseconds: the signal is
+    answered within one). The loop reads no tensor value, so it never waits on the device.
     """
     td = env.reset()
     for i in range(env.params.n_decisions):
+        if preemption is not None and preemption.requested:
+            raise EvaluationInterruptedError(i)
         td = actor(td)
         if on_decision is not None:
             on_decision(i, td)
@@ -200,7 +207,8 @@ def check_chunks(done: Sequence[dict], chunks: Sequence[int], k: int) -> None:
 def evaluate_shared(setup: EvalSetup, actors: Sequence[Actor], desc: str = "eval",
                     recorder: TrajectoryRecorder | None = None,
                     done: Sequence[dict] = (),
-                    on_chunk: Callable[[dict], None] | None = None) -> list[dict]:
+                    on_chunk: Callable[[dict], None] | None = None,
+                    preemption: Preemption | None = None) -> list[dict]:
     """Per-strategy metrics (``R_hat_mean/std/sem``, ``per_flow``, ...) of ``actors`` on the
     same flows, ``n_swimmers`` swimmers each from the same initial conditions (block ``j``
     of the environment is actor ``j``'s; each block's result is the plain evaluation of its
@@ -212,7 +220,9 @@ def evaluate_shared(setup: EvalSetup, actors: Sequence[Actor], desc: str = "eval
     "wall_s": .., "outcomes": [.. per actor]}``, :func:`~.statistics.chunk_outcomes`, as
     handed to ``on_chunk`` after each chunk) stand for chunks
     ``0 .. len(done) - 1``, which are not simulated again; the per-flow results are the
-    uninterrupted evaluation's, and the times add up over the legs."""
+    uninterrupted evaluation's, and the times add up over the legs. ``preemption``: see
+    :func:`run_episodes` (:class:`~.jobs.EvaluationInterruptedError` inside a chunk; the chunks
+    handed to ``on_chunk`` before it stand)."""
     sizes, params = setup.sizes, setup.params
     setup.runtime.apply()
     n_flows, s, k = sizes.n_flows, sizes.n_swimmers, len(actors)
@@ -235,7 +245,8 @@ def evaluate_shared(setup: EvalSetup, actors: Sequence[Actor], desc: str = "eval
         t0 = time.perf_counter()
         if recorder is not None:
             recorder.start(env, s, k)
-        r_hat = run_episodes(env, router, bar, on_decision=recorder).double()
+        r_hat = run_episodes(env, router, bar, on_decision=recorder,
+                             preemption=preemption).double()
         env.check_displacement()
         if recorder is not None:
             recorder.finish(r_hat)
@@ -275,7 +286,10 @@ def evaluate_shared(setup: EvalSetup, actors: Sequence[Actor], desc: str = "eval
 
 
 def evaluate(setup: EvalSetup, actor: Actor, strategy: str,
-             recorder: TrajectoryRecorder | None = None) -> dict:
-    """Metrics of one strategy (named ``strategy`` in the record) on ``setup``."""
-    (m,) = evaluate_shared(setup, [actor], desc=f"eval {strategy}", recorder=recorder)
+             recorder: TrajectoryRecorder | None = None,
+             preemption: Preemption | None = None) -> dict:
+    """Metrics of one strategy (named ``strategy`` in the record) on ``setup``; stopped
+    between two decisions by ``preemption`` (:class:`~.jobs.EvaluationInterruptedError`)."""
+    (m,) = evaluate_shared(setup, [actor], desc=f"eval {strategy}", recorder=recorder,
+                           preemption=preemption)
     return {"strategy": strategy, **m}

@@ -4,15 +4,25 @@ The flow enters through a coefficient path ``c(t_k)``, ``k = 0..K``, drawn befor
 the kernel itself is deterministic and free of random-number calls:
 ``q(x, t_k) = sum_m c_m(t_k) I[Q_m](x)`` (``I`` bilinear periodic interpolation).
 
-Two implementations with the same arithmetic:
+Three implementations with the same arithmetic:
 
 * ``eager`` – :func:`integrate_interval`, plain torch ops on all swimmers at once (any device;
   the reference);
 * ``fused`` – ``swimrl/physics/kernels/heun_cpu.cpp``, one pass per swimmer over the ``K``
   steps with everything in registers (CPU; built on first use). Tested against the reference.
+* ``compiled`` – :func:`integrate_interval` traced once by ``torch.compile(fullgraph=True)``
+  (:func:`compiled_interval`): the ``2 K`` stages of gathers and pointwise arithmetic become a
+  handful of generated kernels (Triton on CUDA, C++ on the CPU) instead of ~30 launches per
+  stage; no graph break, so the call can sit inside a CUDA-graph capture. The default on CUDA
+  (``kernel=auto``); on the CPU the hand-fused kernel is faster (``benchmarks/bench_env.py``:
+  2.5x at 4096 swimmers), so ``auto`` keeps it there.
+
+Every kernel is free of host synchronisation: no ``.item()``, no branch on a tensor value.
 """
 
 from __future__ import annotations
+
+import functools
 
 import torch
 
@@ -80,14 +90,36 @@ def integrate_interval_fused(
     return pos, theta
 
 
-KERNELS = ("auto", "eager", "fused")
+@functools.cache
+def compiled_interval():
+    """:func:`integrate_interval` compiled by ``torch.compile(fullgraph=True, dynamic=False)``
+    (one compilation per process and per combination of shapes, dtype and scalar arguments;
+    ~30-60 s on the CPU, a few seconds on a GPU). ``fullgraph=True``: a graph break raises
+    instead of silently splitting the interval into eager pieces."""
+    return torch.compile(integrate_interval, fullgraph=True, dynamic=False)
+
+
+def integrate_interval_compiled(
+    table, coeff_path, flow_index, pos, theta, shape_factor, kicks, n, spacing, swim_speed, dt
+) -> tuple[torch.Tensor, torch.Tensor]:
+    """Same contract as :func:`integrate_interval`, through :func:`compiled_interval`."""
+    return compiled_interval()(table, coeff_path, flow_index, pos, theta,
+                               shape_factor.to(table.dtype), kicks, int(n), float(spacing),
+                               float(swim_speed), float(dt))
+
+
+KERNELS = ("auto", "eager", "fused", "compiled")
 
 
 def select_kernel(name: str, device: torch.device):
-    """The integration function for ``kernel=name`` (``auto``: fused on CPU when it builds)."""
+    """The integration function for ``kernel=name``. ``auto``: ``fused`` on the CPU when it
+    builds (else ``eager``), ``compiled`` on any other device."""
     one_of("kernel", name, KERNELS)
+    if name == "compiled" or (name == "auto" and device.type != "cpu"):
+        return integrate_interval_compiled
     if name == "eager" or device.type != "cpu":
-        require(name != "fused", "kernel", name, f"'auto' or 'eager' on device={device}")
+        require(name != "fused", "kernel", name,
+                f"'auto', 'eager' or 'compiled' on device={device}")
         return integrate_interval
     if name == "auto" and load_cpu_kernel() is None:
         return integrate_interval

@@ -46,9 +46,11 @@ def auto_reward_scale(env: SwimmerEnv, gamma: float) -> float:
 def make_env(flow: FlowSpec, params: EnvParams, runtime: Runtime, train: TrainSettings,
              loss: LossSettings, seed: int) -> TransformedEnv:
     """Training env: ``train.n_flows x train.n_swimmers`` swimmers in ``flow``, seeded with
-    ``seed`` (the training stream, :func:`~swimrl.rl.plan.training_seed`), with the reward
+    ``seed`` (the training stream, :func:`~swimrl.rl.plan.training_seed`), episodes staggered
+    in ``train.stagger`` groups (:meth:`~swimrl.env.SwimmerEnv.stagger`), with the reward
     multiplied by ``train.reward_scale`` (None: :func:`auto_reward_scale` at ``loss.gamma``)."""
     base = SwimmerEnv.build(flow, params, runtime, train.n_flows, train.n_swimmers, seed)
+    base.stagger(train.stagger)  # train.stagger groups of flows, episodes offset
     scale = train.reward_scale
     if scale is None:
         scale = auto_reward_scale(base, loss.gamma)
@@ -115,13 +117,32 @@ def make_collector(env: EnvBase, actor, train: TrainSettings, total_frames: int,
     )
 
 
+class FiniteObservationGAE(GAE):
+    """TorchRL's ``GAE``, unchanged but for one step it skips: ``_sanitize_next_obs_nan``.
+
+    That step replaces NaN next-observations (written by ``NextStateReconstructor`` with a
+    collector's ``compact_obs=True``) by the root observation, and to find them it calls
+    ``torch.isnan(next_obs).any()`` and branches on the result in Python: a host
+    synchronisation, which invalidates a CUDA-graph capture of the GAE
+    (``cudaErrorStreamCaptureInvalidated``) and is a graph break for ``torch.compile``.
+    Here it can only ever be a no-op: :class:`~swimrl.env.SwimmerEnv` writes every
+    observation from finite flow fields and swimmer states (the finiteness of the results is
+    checked separately, :meth:`~swimrl.env.SwimmerEnv.check_displacement` and the trainer's
+    non-finite checks), and the collector is not built with ``compact_obs``. The advantages
+    are therefore those of ``GAE`` bit for bit (``tests/test_capture.py``)."""
+
+    @staticmethod
+    def _sanitize_next_obs_nan(data, in_keys):
+        return data
+
+
 def make_loss(loss: LossSettings, actor, critic, gae_chunk: int | None
               ) -> tuple[ClipPPOLoss, GAE]:
     r"""``ClipPPOLoss`` (paper ``J(w)``, clip ``epsilon``, entropy bonus) and ``GAE``
     (``A_i = sum_k (gamma lambda)^k delta_{i+k}``, ``delta_i = r_i + gamma V(s_{i+1}) -
     V(s_i)``, bootstrapped at truncation since ``terminated`` is never set), its critic
     evaluated in chunks of ``gae_chunk`` samples (``train.gae_chunk``)."""
-    gae = GAE(
+    gae = FiniteObservationGAE(
         gamma=loss.gamma,
         lmbda=loss.gae_lambda,
         value_network=critic,

@@ -48,6 +48,7 @@ LEGACY_KEYS = {
 #: replay: decoding on the run's grid, one start per flow; every flow: no bound on sigma).
 ADDED_KEYS = {
     "*": {"model.min_std": NO_STD_BOUND,  # every flow
+          "train.stagger": 1,
           "task": {"name": "displacement", "distance": 20.0, "arrival_radius": 1.0},
           "reward": {"energy_weight": 0.0, "shape_change_weight": 0.0}},
     "stochastic": {

@@ -70,6 +70,7 @@ class TrainSettings:
     cudagraphs: bool  # CUDA graphs of the gradient step, GAE and policy (CUDA only)
     gae_chunk: int | None  # critic evaluations of the GAE in chunks of this many samples
     compare_baselines: bool
+    stagger: int  # groups of flows with offset episodes (SwimmerEnv.stagger)
 
     def __post_init__(self) -> None:
         def k(key: str) -> str:
@@ -108,6 +109,8 @@ class TrainSettings:
         if self.gae_chunk is not None:
             as_int(k("gae_chunk"), self.gae_chunk)
         as_bool(k("compare_baselines"), self.compare_baselines)
+        require(as_int(k("stagger"), self.stagger) <= n_flows, k("stagger"), self.stagger,
+                f"an integer in [1, train.n_flows={n_flows}]")
         keep_number_types(self)
 
 

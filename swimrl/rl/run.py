@@ -28,7 +28,12 @@ from pathlib import Path
 
 from swimrl.errors import ConfigError
 from swimrl.evaluation.compare import CompareConfig, compare, strategy_variants
-from swimrl.evaluation.jobs import preemption_signals, refuse_if_locked, run_lock
+from swimrl.evaluation.jobs import (
+    EvaluationInterruptedError,
+    preemption_signals,
+    refuse_if_locked,
+    run_lock,
+)
 from swimrl.evaluation.records import flatten, summary_line, write_comparison, write_json
 from swimrl.policies.files import RunLayout
 from swimrl.rl.checkpoint import load_checkpoint, upgrade_config
@@ -123,10 +128,10 @@ def train(cfg: TrainConfig, out: Path) -> dict | None:
     throughout; returns the final metrics, or None if stopped early or already finished.
 
     A preemption signal (:func:`~swimrl.evaluation.jobs.preemption_signals`) during the
-    updates stops the run after the update in flight with a checkpoint and raises
-    :class:`~swimrl.evaluation.jobs.Preempted` (exit status
-    :data:`~swimrl.evaluation.jobs.PREEMPTED_EXIT`); one that arrives during the final
-    evaluation lets the run finish."""
+    updates stops the run after the update in flight (or inside an evaluation, before its next
+    decision) with a checkpoint and raises :class:`~swimrl.evaluation.jobs.Preempted` (exit
+    status :data:`~swimrl.evaluation.jobs.PREEMPTED_EXIT`); ``resume=true`` then continues
+    with the evaluation that was stopped (periodic or final)."""
     out = Path(out)
     plan = make_plan(cfg)
     cfg.runtime.apply()
@@ -182,7 +187,8 @@ def _train_locked(cfg: TrainConfig, plan: TrainPlan, out: Path) -> dict | None:
             finished = trainer.train(cfg.train.stop_after_updates, preemption)
             u, frames = trainer.counters["updates"], trainer.counters["frames"]
             if preemption.requested:
-                preemption.stop(f"after update {u}/{plan.n_updates} ({frames} frames): "
+                where = "during the periodic evaluation " if trainer.eval_pending else ""
+                preemption.stop(f"{where}after update {u}/{plan.n_updates} ({frames} frames): "
                                 f"checkpoint written to {run.checkpoint}; continue with "
                                 "resume=true")
             if not finished:
@@ -190,9 +196,12 @@ def _train_locked(cfg: TrainConfig, plan: TrainPlan, out: Path) -> dict | None:
                          plan.n_updates)
                 return None
             trainer.save_policy()
-            metrics = trainer.evaluate(cfg.held_out)
-            if preemption.requested:
-                log.info("%s during the final evaluation: finishing the run", preemption.names)
+            try:
+                metrics = trainer.evaluate(cfg.held_out)
+            except EvaluationInterruptedError:
+                preemption.stop(f"during the final evaluation (training finished, {frames} "
+                                f"frames; checkpoint {run.checkpoint}): continue with "
+                                "resume=true, which makes the final evaluation")
     finally:
         trainer.close()
     metrics["policy"] = str(out)

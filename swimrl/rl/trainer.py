@@ -18,7 +18,8 @@ so successive points share their randomness); update 0 is the initial policy.
 Resume: the state after an update is checkpointed atomically; ``resume=true`` reloads it
 (networks, optimisers, schedulers, RNGs, counters) and continues with update ``u + 1``; a
 preemption signal (:mod:`swimrl.evaluation.jobs`) stops the loop after the update in flight,
-with a checkpoint.
+or inside a periodic evaluation before its next decision, with a checkpoint; an evaluation
+stopped so is marked in the checkpoint (``counters["eval_pending"]``) and made first on resume.
 Collector and environment are *not* checkpointed mid-episode: the resumed run starts fresh
 episodes (new flow realisations drawn from the restored env generator), so the frames
 collected after the last checkpoint and the unfinished episodes of the killed process are
@@ -39,7 +40,7 @@ from torch.profiler import record_function
 from tqdm.auto import tqdm
 
 from swimrl.errors import NonFiniteError
-from swimrl.evaluation.jobs import Preemption
+from swimrl.evaluation.jobs import EvaluationInterruptedError, Preemption
 from swimrl.evaluation.rollout import EvalSetup, evaluate
 from swimrl.policies.files import RunLayout, load_file, policy_meta, save_policy
 from swimrl.policies.networks import deterministic_actor, policy_std
@@ -91,6 +92,10 @@ class PPOTrainer:
         self.last_eval: dict | None = None
         self.last_train_r_hat: float | None = None
         self.curve_base: dict[int, dict[str, float]] | None = None  # see restore
+        #: Read between the decisions of every evaluation (set by :meth:`train`).
+        self.preemption: Preemption | None = None
+        #: A periodic evaluation was started and not finished (a signal stopped it).
+        self.eval_pending = False
 
     # -- state --------------------------------------------------------------------------------
     @property
@@ -110,7 +115,7 @@ class PPOTrainer:
             optimizers=self.optimizers,
             schedulers=self.schedulers,
             rng=capture_rng(self.swimmer_env.generator),
-            counters=self.counters,
+            counters={**self.counters, **({"eval_pending": True} if self.eval_pending else {})},
             config=self.config,
             meta={**self.meta, "reward_scale": self.reward_scale},
         )
@@ -131,6 +136,7 @@ class PPOTrainer:
         self._match_optimizers_to_device()
         restore_rng(ck["rng"], self.swimmer_env.generator)
         self.counters = dict(ck["counters"])
+        self.eval_pending = bool(self.counters.pop("eval_pending", False))
         # the curve up to the checkpoint, kept where the event files may be gone (a run
         # resumed from its committed record: checkpoint + curves.csv)
         curves = self.run.curves
@@ -169,15 +175,22 @@ class PPOTrainer:
         )
 
     # -- evaluation ---------------------------------------------------------------------------
-    def evaluate(self, setup: EvalSetup | None = None) -> dict:
+    def evaluate(self, setup: EvalSetup | None = None,
+                 preemption: Preemption | None = None) -> dict:
         """Deterministic policy on held-out flows (``seed + EVAL_SEED_OFFSET``); default: the
-        periodic evaluation's ``train.eval_flows x train.eval_swimmers``."""
+        periodic evaluation's ``train.eval_flows x train.eval_swimmers``. ``preemption``
+        (default :attr:`preemption`) stops it between two decisions
+        (:class:`~swimrl.evaluation.jobs.EvaluationInterruptedError`)."""
         if setup is None:
             t = self.cfg.train
             setup = self.cfg.held_out.resized(t.eval_flows, t.eval_swimmers)
-        return evaluate(replace(setup, seed=self.plan.eval_seed), self.policy, "policy")
+        return evaluate(replace(setup, seed=self.plan.eval_seed), self.policy, "policy",
+                        preemption=self.preemption if preemption is None else preemption)
 
     def _periodic_eval(self) -> None:
+        """The periodic held-out evaluation of the current policy, logged at the current frame
+        count; marked pending (:attr:`eval_pending`) until it has finished."""
+        self.eval_pending = True
         t0 = time.perf_counter()
         # the policy evaluated, kept so that a policy can be chosen afterwards on flows of a
         # separate validation seed (the periodic evaluation's flows are the final one's)
@@ -192,6 +205,7 @@ class PPOTrainer:
                 self.logger.log_scalar(tag, m[key], step)
         self.logger.log_scalar("eval/time_s", time.perf_counter() - t0, step)
         self.logger.log_scalar("eval/R_hat_vs_episodes", m["R_hat_mean"], round(self.episodes))
+        self.eval_pending = False
 
     # -- one update ---------------------------------------------------------------------------
     def _loss(self, batch: TensorDict) -> tuple[torch.Tensor, TensorDict]:
@@ -314,18 +328,25 @@ class PPOTrainer:
               preemption: Preemption | None = None) -> bool:
         """Run updates until the plan is done (returns True), ``stop_after`` updates were
         made in this call, or ``preemption`` was requested (a signal, checked after each
-        update: the update in flight and its periodic evaluation are finished); then the
-        state is checkpointed and :attr:`finished_training` returned."""
+        update and between the decisions of a periodic evaluation: the update in flight is
+        finished, an evaluation in flight is left pending); then the state is checkpointed
+        and :attr:`finished_training` returned."""
         cfg, plan, fpb = self.cfg, self.plan, self.cfg.train.frames_per_batch
+        self.preemption = preemption
         if self.logger is None:
             self.logger = rlb.make_logger(self.run)
+        first = self.counters["updates"] == 0 and cfg.train.eval_every
+        if first or self.eval_pending:
+            try:
+                self._periodic_eval()
+            except EvaluationInterruptedError:
+                self.save_checkpoint()
+                return self.finished_training
         remaining = plan.n_updates - self.counters["updates"]
         if remaining <= 0:
             return True
         n_run = remaining if stop_after is None else min(remaining, stop_after)
         stop_at = self.counters["updates"] + n_run
-        if self.counters["updates"] == 0 and cfg.train.eval_every:
-            self._periodic_eval()
         collector = rlb.make_collector(self.env, self.actor, cfg.train, n_run * fpb, self.device)
         bar = tqdm(
             total=plan.total_frames,
@@ -375,15 +396,20 @@ class PPOTrainer:
                         self.logger.log_scalar(k, v, step)
                 bar.update(fpb)
                 every = cfg.train.eval_every
+                interrupted = False
                 if every and (u % every == 0 or u == plan.n_updates):
-                    self._periodic_eval()
+                    try:
+                        self._periodic_eval()
+                    except EvaluationInterruptedError:  # a signal: checkpoint, evaluation pending
+                        interrupted = True
                 post = {"upd": u, "fps": f"{logs['time/frames_per_s']:.0f}"}
                 if self.last_train_r_hat is not None:
                     post["R_train"] = f"{self.last_train_r_hat:.3f}"
                 if self.last_eval is not None:
                     post["R_eval"] = f"{self.last_eval['R_hat_mean']:.3f}"
                 bar.set_postfix(post, refresh=False)
-                last = u >= stop_at or (preemption is not None and preemption.requested)
+                last = (interrupted or u >= stop_at
+                        or (preemption is not None and preemption.requested))
                 if (
                     last
                     or u % cfg.train.checkpoint_every == 0
