@@ -12,6 +12,7 @@ pyqg ~12.5 ms/step.
     python benchmarks/bench_dns.py                       # CPU, threads 1, 256^2 and 512^2
     python benchmarks/bench_dns.py --threads 1 2 --batches 1 4 16 --forms basdevant divergence
     python benchmarks/bench_dns.py --device cuda --sizes 512 1024 --batches 1 16 64
+    python benchmarks/bench_dns.py --smoke               # 32^2, one realisation, seconds
 """
 
 from __future__ import annotations
@@ -82,15 +83,24 @@ def main(argv: list[str] | None = None) -> list[dict]:
     ap.add_argument("--device", default="cpu", help="cpu | cuda | auto (cuda if available)")
     ap.add_argument("--threads", type=int, nargs="+", default=[1],
                     help="CPU thread counts to try (torch.set_num_threads)")
-    ap.add_argument("--sizes", type=int, nargs="+", default=[256, 512])
-    ap.add_argument("--batches", type=int, nargs="+", default=[1, 4, 16])
+    ap.add_argument("--sizes", type=int, nargs="+", default=None, help="N (default 256 512)")
+    ap.add_argument("--batches", type=int, nargs="+", default=None, help="B (default 1 4 16)")
     ap.add_argument("--dtype", default="float32", choices=["float32", "float64"])
     ap.add_argument("--forms", nargs="+", default=["basdevant"],
                     choices=["basdevant", "divergence"], help="advection forms to time")
-    ap.add_argument("--min-time", type=float, default=1.0, help="seconds timed per case")
-    ap.add_argument("--min-steps", type=int, default=5)
+    ap.add_argument("--min-time", type=float, default=None,
+                    help="seconds timed per case (default 1)")
+    ap.add_argument("--min-steps", type=int, default=None, help="default 5")
     ap.add_argument("--json", default=None, help="also write the results to this file")
+    ap.add_argument("--smoke", action="store_true",
+                    help="32^2, B = 1, 2 steps (a test that the script runs)")
     args = ap.parse_args(argv)
+    defaults = ({"sizes": [32], "batches": [1], "min_time": 0.0, "min_steps": 2} if args.smoke
+                else {"sizes": [256, 512], "batches": [1, 4, 16], "min_time": 1.0,
+                      "min_steps": 5})
+    for key, value in defaults.items():
+        if getattr(args, key) is None:
+            setattr(args, key, value)
     device = args.device
     if device == "auto":
         device = "cuda" if torch.cuda.is_available() else "cpu"

@@ -1,11 +1,21 @@
-"""Throughput of the swimmer environment: swimmer-substeps per second.
+"""Throughput of the swimmer environment: swimmer-substeps per second and ms per env step.
 
-A substep is one Heun step ``dt`` of one swimmer (two flow evaluations). Prints, for each
-batch ``n_flows x n_swimmers``, the best of ``--repeats`` timings of ``--intervals`` decision
-intervals (``T_u/dt`` substeps each) of :meth:`SwimmerEnv.integrate`, for the eager torch
-reference and the fused CPU kernel (``kernel=eager|fused``).
+A substep is one Heun step ``dt`` of one swimmer (two flow evaluations); a decision interval
+is ``K = T_u/dt`` substeps of every swimmer. Prints, for each batch ``n_flows x n_swimmers``
+and kernel (``kernel=eager|fused|compiled``: the eager torch reference, the fused C++ CPU
+kernel, ``torch.compile(fullgraph=True)`` of the interval), the best of ``--repeats`` timings
+of ``--intervals`` consecutive
+
+* decision intervals (:meth:`SwimmerEnv.integrate`): swimmer-substeps/s and ms per interval;
+* env steps (``env.step``: the interval + signals, reward, done flags, TorchRL's
+  bookkeeping: what the collector calls once per decision): ms per env step;
+
+and the seconds of the first (warm-up) interval, where ``compiled`` compiles.
 
     python benchmarks/bench_env.py --device cpu --threads 2
+    python benchmarks/bench_env.py --threads 1 --batches 64x64 --kernels fused compiled
+    python benchmarks/bench_env.py --device cuda --batches 256x64 --kernels eager compiled
+    python benchmarks/bench_env.py --smoke          # a tiny grid and batch, seconds
 """
 
 from __future__ import annotations
@@ -19,51 +29,99 @@ from swimrl.env import EnvParams, SwimmerEnv
 from swimrl.flows.stochastic import StochasticFlow
 
 DEFAULT_BATCHES = ["1x1000", "10x100", "10x1000", "100x100", "1x10000", "10x10000", "1x100000"]
+#: The GPU floor's batch (docs/training.md, issue 46): train_preset=parallel_gpu, 16 384 swimmers.
+GPU_FLOOR_BATCH = "256x64"
+KERNELS = ("eager", "fused", "compiled")
+#: --smoke: a 64^2 grid of spacing 0.1, 2 flows x 8 swimmers, one interval, one repeat.
+SMOKE = {"n_grid": 64, "spacing": 0.1, "batches": ["2x8"], "intervals": 1, "repeats": 1}
 
 
-def measure(flows: int, swimmers: int, kernel: str, args) -> float:
-    """Best swimmer-substeps/s over repeats (after one warm-up interval)."""
+def _sync(device: str) -> None:
+    if device.startswith("cuda"):
+        torch.cuda.synchronize()
+
+
+def measure(flows: int, swimmers: int, kernel: str, args) -> dict:
+    """Best swimmer-substeps/s, ms per interval and ms per env step over the repeats (after one
+    warm-up interval and one warm-up env step)."""
     gen = torch.Generator(device=args.device).manual_seed(0)
-    flow = StochasticFlow(flows, args.kubo, device=args.device, generator=gen)
+    flow = StochasticFlow(flows, args.kubo, n_grid=args.n_grid, spacing=args.spacing,
+                          device=args.device, generator=gen)
     env = SwimmerEnv(flow, swimmers, EnvParams(), kernel=kernel)
-    env.reset()
+    td = env.reset()
+    td.set("action", torch.full(env.action_spec.shape, 0.98, device=args.device))
     lam = torch.full((flows * swimmers,), 0.98, device=args.device)
-    env.integrate(lam)
-    best = 0.0
+    _sync(args.device)
+    t0 = time.perf_counter()
+    env.integrate(lam)  # compiles (kernel=compiled), builds or loads (fused)
+    _sync(args.device)
+    first = time.perf_counter() - t0
+    env.step(td)
+    k = env.params.n_substeps
+    interval, step = float("inf"), float("inf")
     for _ in range(args.repeats):
-        if args.device.startswith("cuda"):
-            torch.cuda.synchronize()
+        _sync(args.device)
         t0 = time.perf_counter()
         for _ in range(args.intervals):
             env.integrate(lam)
-        if args.device.startswith("cuda"):
-            torch.cuda.synchronize()
-        rate = flows * swimmers * env.params.n_substeps * args.intervals
-        best = max(best, rate / (time.perf_counter() - t0))
-    return best
+        _sync(args.device)
+        interval = min(interval, (time.perf_counter() - t0) / args.intervals)
+        t0 = time.perf_counter()
+        for _ in range(args.intervals):
+            env.step(td)
+        _sync(args.device)
+        step = min(step, (time.perf_counter() - t0) / args.intervals)
+    return {"substeps_per_s": flows * swimmers * k / interval, "ms_interval": 1e3 * interval,
+            "ms_step": 1e3 * step, "first_s": first, "n_substeps": k}
 
 
-def main() -> None:
+def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     p.add_argument("--device", default="cpu")
     p.add_argument("--threads", type=int, default=2)
     p.add_argument("--kubo", type=float, default=10.0)
-    p.add_argument("--batches", nargs="*", default=DEFAULT_BATCHES, help="FLOWSxSWIMMERS")
-    p.add_argument("--intervals", type=int, default=5)
-    p.add_argument("--repeats", type=int, default=3)
-    p.add_argument("--kernels", nargs="*", default=["eager", "fused"])
-    args = p.parse_args()
+    p.add_argument("--batches", nargs="*", default=None,
+                   help=f"FLOWSxSWIMMERS (default: {' '.join(DEFAULT_BATCHES)}; the GPU floor's "
+                        f"batch of 16384 swimmers is {GPU_FLOOR_BATCH})")
+    p.add_argument("--intervals", type=int, default=None, help="timed per repeat (default 5)")
+    p.add_argument("--repeats", type=int, default=None, help="best of (default 3)")
+    p.add_argument("--kernels", nargs="*", default=["eager", "fused"], choices=KERNELS,
+                   help="fused runs on the CPU only (skipped elsewhere)")
+    p.add_argument("--n-grid", type=int, default=None, help="flow grid points (default 400)")
+    p.add_argument("--spacing", type=float, default=None, help="grid spacing (default 0.025)")
+    p.add_argument("--smoke", action="store_true",
+                   help="tiny grid and batch, one interval (a test that the script runs)")
+    args = p.parse_args(argv)
+    defaults = SMOKE if args.smoke else {"n_grid": 400, "spacing": 0.025,
+                                         "batches": DEFAULT_BATCHES, "intervals": 5, "repeats": 3}
+    for key, value in defaults.items():
+        if getattr(args, key) is None:
+            setattr(args, key, value)
+    return args
+
+
+def main(argv: list[str] | None = None) -> list[dict]:
+    args = parse_args(argv)
     torch.set_num_threads(args.threads)
     dev = torch.cuda.get_device_name() if args.device.startswith("cuda") else "cpu"
-    print(f"# device={args.device} ({dev}) threads={args.threads} torch={torch.__version__}")
-    print(f"{'batch':>10} {'swimmers':>9} {'kernel':>7} {'substeps/s':>11}")
+    k = EnvParams().n_substeps
+    print(f"# device={args.device} ({dev}) threads={args.threads} torch={torch.__version__} "
+          f"Ku={args.kubo:g} K={k} substeps per interval, grid {args.n_grid} x {args.spacing:g}; "
+          f"best of {args.repeats} x {args.intervals} intervals")
+    print(f"{'batch':>10} {'swimmers':>9} {'kernel':>8} {'substeps/s':>11} {'ms/interval':>12} "
+          f"{'ms/env step':>12} {'warm-up s':>10}")
+    rows = []
     for b in args.batches:
         flows, swimmers = (int(v) for v in b.split("x"))
         for kernel in args.kernels:
             if kernel == "fused" and not args.device.startswith("cpu"):
                 continue
             r = measure(flows, swimmers, kernel, args)
-            print(f"{b:>10} {flows * swimmers:>9} {kernel:>7} {r:>11.3e}", flush=True)
+            rows.append({"batch": b, "kernel": kernel, **r})
+            print(f"{b:>10} {flows * swimmers:>9} {kernel:>8} {r['substeps_per_s']:>11.3e} "
+                  f"{r['ms_interval']:>12.3f} {r['ms_step']:>12.3f} {r['first_s']:>10.2f}",
+                  flush=True)
+    return rows
 
 
 if __name__ == "__main__":

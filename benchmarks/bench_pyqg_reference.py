@@ -11,14 +11,22 @@ environment (pyqg 0.7.2 needs Cython < 3 to build):
     /tmp/pyqgenv/bin/pip install "cython<3" "numpy<2" setuptools wheel pyfftw
     /tmp/pyqgenv/bin/pip install --no-build-isolation pyqg
     OMP_NUM_THREADS=1 /tmp/pyqgenv/bin/python benchmarks/bench_pyqg_reference.py --sizes 256 512
+    /tmp/pyqgenv/bin/python benchmarks/bench_pyqg_reference.py --smoke   # 32^2, 5 steps
+
+Without pyqg it says so on stderr and exits with status 3 (:data:`NO_PYQG_EXIT`).
 """
 
 from __future__ import annotations
 
 import argparse
+import importlib.util
+import sys
 import time
 
 import numpy as np
+
+#: Exit status when pyqg is not importable (the benchmark cannot run; nothing is timed).
+NO_PYQG_EXIT = 3
 
 
 def time_pyqg(n: int, n_steps: int, dt: float = 1e-4) -> float:
@@ -46,9 +54,20 @@ def time_pyqg(n: int, n_steps: int, dt: float = 1e-4) -> float:
 def main() -> None:
     """Print ms/step of pyqg at each requested N."""
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
-    ap.add_argument("--sizes", type=int, nargs="+", default=[256, 512])
-    ap.add_argument("--steps", type=int, default=200)
+    ap.add_argument("--sizes", type=int, nargs="+", default=None, help="N (default 256 512)")
+    ap.add_argument("--steps", type=int, default=None, help="timed per N (default 200)")
+    ap.add_argument("--smoke", action="store_true",
+                    help="32^2, 5 steps (a test that the script runs)")
     args = ap.parse_args()
+    if args.sizes is None:
+        args.sizes = [32] if args.smoke else [256, 512]
+    if args.steps is None:
+        args.steps = 5 if args.smoke else 200
+    if importlib.util.find_spec("pyqg") is None:
+        print(f"pyqg is not installed in {sys.executable}: it is not a dependency of swimrl; "
+              "install it in a separate environment (see this script's docstring)",
+              file=sys.stderr)
+        sys.exit(NO_PYQG_EXIT)
     print(f"{'N':>5} {'pyqg ms/step (AB3, 1 RHS)':>26}")
     for n in args.sizes:
         print(f"{n:>5} {time_pyqg(n, args.steps):>26.2f}", flush=True)

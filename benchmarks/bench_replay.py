@@ -19,6 +19,11 @@ Prints, one thread:
 
     python benchmarks/bench_replay.py                      # surrogate store, all parts
     python benchmarks/bench_replay.py --store data/dns/dns_n512_seed0.zarr --parts error
+    python benchmarks/bench_replay.py --smoke      # a 64^2 surrogate, tiny runs: seconds
+
+``--smoke`` (a test that the script runs): a 64^2 surrogate store of 60 snapshots, decode
+grids 64 and 48, one ``swimrl-eval`` of 2 x 8 swimmers over 1 tau_K and one ``swimrl-train``
+of 2 updates of 2 x 4 swimmers (eager), all parts unless ``--parts`` says otherwise.
 """
 
 from __future__ import annotations
@@ -152,16 +157,17 @@ def eval_speed(path: Path, workdir: Path, variants: list[tuple[str, ...]], durat
 
 
 def train_speed(path: Path, workdir: Path, variants: list[tuple[str, ...]], duration: float,
-                updates: int) -> None:
-    """swimrl-train on the store: overall frames/s (median over updates 2..)."""
+                updates: int, frames_per_batch: int = 51200, base: tuple[str, ...] = ()) -> None:
+    """swimrl-train on the store: overall frames/s (median over updates 2..); ``base``:
+    overrides of every run, whose batch is ``frames_per_batch`` frames."""
     print(f"\nswimrl-train flow=dns_replay, one thread, T = {duration} tau_K, {updates} updates")
     for i, extra in enumerate(variants):
         out = workdir / f"train{i}"
         run([sys.executable, "-m", "swimrl.cli.train", "flow=dns_replay", f"flow.path={path}",
              "threads=1", "train.progress=false", f"episode.duration={duration}",
-             f"train.total_frames={updates * 51200}", "train.eval_every=0",
+             f"train.total_frames={updates * frames_per_batch}", "train.eval_every=0",
              "train.compare_baselines=false", "overwrite=true", f"hydra.run.dir={out}",
-             *extra])
+             *base, *extra])
         with open(out / "curves.csv") as f:
             fps = [float(r["time/frames_per_s"]) for r in csv.DictReader(f)
                    if r.get("time/frames_per_s")]
@@ -174,16 +180,21 @@ def main() -> None:
     ap.add_argument("--store", type=Path, default=None, help="a stored run (default: surrogate)")
     ap.add_argument("--workdir", type=Path, default=None, help="surrogate store and run dirs")
     ap.add_argument("--parts", default="error,eval,train")
-    ap.add_argument("--grids", default="512,384,256,192")
-    ap.add_argument("--updates", type=int, default=4)
+    ap.add_argument("--grids", default=None, help="decode grids (default 512,384,256,192)")
+    ap.add_argument("--updates", type=int, default=None, help="default 4 (--smoke: 2)")
+    ap.add_argument("--smoke", action="store_true",
+                    help="64^2 surrogate, tiny runs (a test that the script runs)")
     args = ap.parse_args()
     torch.set_num_threads(1)
     workdir = args.workdir or Path(tempfile.mkdtemp(prefix="bench_replay_"))
     workdir.mkdir(parents=True, exist_ok=True)
-    path = args.store or surrogate_store(workdir / "surrogate_n512.zarr")
     parts = args.parts.split(",")
+    if args.smoke:
+        smoke(args, workdir, parts)
+        return
+    path = args.store or surrogate_store(workdir / "surrogate_n512.zarr")
     if "error" in parts:
-        decode_errors(path, [int(g) for g in args.grids.split(",")])
+        decode_errors(path, [int(g) for g in (args.grids or "512,384,256,192").split(",")])
     if "eval" in parts:
         eval_speed(path, workdir, [
             ("eval.n_flows=8", "eval.n_swimmers=1250", "eval.flows_per_batch=8"),
@@ -198,7 +209,26 @@ def main() -> None:
             ("flow.flows_per_start=32",),
             ("flow.flows_per_start=64",),
             ("flow.decode_n=384", "flow.flows_per_start=32"),
-        ], duration=20.0, updates=args.updates)
+        ], duration=20.0, updates=args.updates or 4)
+
+
+#: --smoke: every training run of 2 flows x 4 swimmers, L = 10 decisions, eager.
+SMOKE_TRAIN = ("train.n_flows=2", "train.n_swimmers=4", "train.frames_per_batch=80",
+               "train.minibatch_size=40", "train.epochs=1", "train.compile=false",
+               "eval.n_flows=1", "eval.n_swimmers=4")
+
+
+def smoke(args: argparse.Namespace, workdir: Path, parts: list[str]) -> None:
+    """Every part at a tiny size: a 64^2 surrogate (or ``--store``), runs of seconds."""
+    path = args.store or surrogate_store(workdir / "surrogate_n64.zarr", n=64, n_times=60)
+    if "error" in parts:
+        decode_errors(path, [int(g) for g in (args.grids or "64,48").split(",")], points=200)
+    if "eval" in parts:
+        eval_speed(path, workdir, [("eval.n_flows=2", "eval.n_swimmers=8",
+                                    "eval.flows_per_batch=2")], duration=1.0)
+    if "train" in parts:
+        train_speed(path, workdir, [("flow.flows_per_start=2",)], duration=2.0,
+                    updates=args.updates or 2, frames_per_batch=80, base=SMOKE_TRAIN)
 
 
 if __name__ == "__main__":

@@ -32,6 +32,11 @@ code variants (``--variants``, comma-separated):
     python benchmarks/bench_train.py --kubo 10 --updates 5                 # CPU, one thread
     python benchmarks/bench_train.py --device cuda --variants compiled,graphed
     python benchmarks/bench_train.py --presets bigbatch --variants before,compiled
+    python benchmarks/bench_train.py --smoke       # tiny grid and batch, eager, seconds
+
+``--smoke`` (a test that the script runs) puts every preset on a 64^2 grid with 2 flows x 4
+swimmers x L = 10 decisions per update (:data:`SMOKE_OVERRIDES`), one warm-up and one measured
+update, the ``eager`` variant unless ``--variants`` names others.
 """
 
 from __future__ import annotations
@@ -56,6 +61,14 @@ VARIANTS = {
     "compiled": ["train.compile=true"],
     "graphed": ["train.compile=true", "train.cudagraphs=true"],
 }
+#: --smoke: every preset on a tiny grid and batch (episodes of N = 20 decisions, L = 10).
+SMOKE_OVERRIDES = [
+    "flow.n_grid=64", "flow.spacing=0.1", "episode.duration=2.0", "train.n_flows=2",
+    "train.n_swimmers=4", "train.frames_per_batch=80", "train.total_frames=320",
+    "train.minibatch_size=40", "train.minibatches_per_epoch=null", "train.epochs=2",
+    "train.eval_flows=1", "train.eval_swimmers=4", "eval.n_flows=1", "eval.n_swimmers=4",
+    "train.progress=false", "train.stagger=1",
+]
 LABELS = ("ppo/gae", "ppo/minibatch", "ppo/loss_backward", "ppo/clip_optimizer")
 
 
@@ -68,15 +81,16 @@ class Variant:
                                        + VARIANTS[name]))
         plan = make_plan(cfg)
         cfg.runtime.apply()
-        device, dtype = cfg.runtime.device, cfg.runtime.dtype
-        self.name, self.plan = f"{preset}/{name}", plan
+        device = cfg.runtime.device
+        self.name, self.plan, self.train, self.params = (f"{preset}/{name}", plan, cfg.train,
+                                                         cfg.params)
         self.sync = torch.device(device).type == "cuda"  # time kernels, not their launches
-        self.trainer = PPOTrainer(cfg, plan, run_dir / preset / name, device, dtype)
+        self.trainer = PPOTrainer(cfg, plan, run_dir / preset / name)
         if name == "before":
             self.trainer.loss.entropy_bonus = True
-            self.trainer.env.flow._synthesis = None  # full-grid FFT redraw
+            self.trainer.swimmer_env.flow._synthesis = None  # full-grid FFT redraw
         self.collector = rlb.make_collector(
-            self.trainer.env, self.trainer.actor, plan, 10**12, device, cfg.train
+            self.trainer.env, self.trainer.actor, cfg.train, 10**12, device
         )
         self.batches = iter(self.collector)
         self.collect_s: list[float] = []
@@ -104,7 +118,7 @@ class Variant:
         times = []
         for _ in range(repeats):
             t0 = time.perf_counter()
-            self.trainer.env.flow.reset()
+            self.trainer.swimmer_env.flow.reset()
             self._sync()
             times.append(time.perf_counter() - t0)
         return statistics.median(times)
@@ -119,22 +133,37 @@ class Variant:
         return {k: totals.get(k, 0.0) for k in LABELS}
 
 
-def main() -> None:
+def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--presets", default="long_floor05,parallel")
     ap.add_argument("--kubo", default="10")
-    ap.add_argument("--variants", default="compiled")
+    ap.add_argument("--variants", default=None,
+                    help=f"comma-separated, of {', '.join(VARIANTS)} (default compiled; "
+                         "eager with --smoke)")
     ap.add_argument("--device", default="cpu")
-    ap.add_argument("--updates", type=int, default=5)
-    ap.add_argument("--warmup", type=int, default=2)
-    ap.add_argument("--redraws", type=int, default=2)
-    ap.add_argument("--threads", type=int, default=1)
+    ap.add_argument("--updates", type=int, default=None, help="measured (default 5)")
+    ap.add_argument("--warmup", type=int, default=None, help="updates before (default 2)")
+    ap.add_argument("--redraws", type=int, default=None, help="timed (default 2)")
+    ap.add_argument("--threads", type=int, default=1, help="torch threads (threads=)")
     ap.add_argument("--out", default="/tmp/swimrl_bench_train")
+    ap.add_argument("--smoke", action="store_true",
+                    help="tiny grid and batch, one update (a test that the script runs)")
     ap.add_argument("overrides", nargs="*", help="extra config overrides")
-    args = ap.parse_args()
+    args = ap.parse_args(argv)
+    defaults = ({"variants": "eager", "updates": 1, "warmup": 1, "redraws": 1} if args.smoke
+                else {"variants": "compiled", "updates": 5, "warmup": 2, "redraws": 2})
+    for key, value in defaults.items():
+        if getattr(args, key) is None:
+            setattr(args, key, value)
+    return args
+
+
+def main(argv: list[str] | None = None) -> None:
+    args = parse_args(argv)
     torch.set_num_threads(args.threads)
-    base = [f"flow.kubo={args.kubo}", "seed=0", "threads=1", f"device={args.device}"]
-    base += list(args.overrides)
+    base = [f"flow.kubo={args.kubo}", "seed=0", f"threads={args.threads}",
+            f"device={args.device}"]
+    base += (SMOKE_OVERRIDES if args.smoke else []) + list(args.overrides)
     variants = [Variant(p, v, base, Path(args.out))
                 for p in args.presets.split(",") for v in args.variants.split(",")]
     for i in range(args.warmup + args.updates):
@@ -150,16 +179,16 @@ def main() -> None:
           + f"{'redraw s':>10}{'episode frames/s':>18}")
     overall, episode = {}, {}
     for v in variants:
-        plan = v.plan
-        fpb = plan.frames_per_batch
-        per_episode = plan.params.n_decisions / plan.rollout_steps  # updates per episode, U
+        plan, t = v.plan, v.train
+        fpb = t.frames_per_batch
+        per_episode = v.params.n_decisions / plan.rollout_steps  # updates per episode, U
         c, u = statistics.median(v.collect_s), statistics.median(v.update_s)
         overall[v.name] = fpb / (c + u)
         parts = v.breakdown()
         r = v.redraw(args.redraws)
         episode[v.name] = per_episode * fpb / (per_episode * (c + u) + r)
         print(
-            f"{v.name:<{width}}{plan.n_flows * plan.n_swimmers:>9}{fpb:>9}{fpb / c:>14.0f}"
+            f"{v.name:<{width}}{t.n_flows * t.n_swimmers:>9}{fpb:>9}{fpb / c:>14.0f}"
             f"{c:>11.3f}{u:>10.3f}{overall[v.name]:>10.0f}"
             + "".join(f"{parts[k]:>16.3f}" for k in LABELS)
             + f"{r:>10.2f}{episode[v.name]:>18.0f}"
