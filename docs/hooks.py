@@ -1,24 +1,40 @@
 """MkDocs hooks of the swimrl docs site (``mkdocs.yml``: ``hooks: [docs/hooks.py]``).
 
-* **Examples.** Every ``examples/<name>.py`` (jupytext percent format: ``# %%`` code cells,
-  ``# %% [markdown]`` text cells) becomes the page ``examples/<name>.md``: the text cells as
-  Markdown, the code cells as Python blocks, nothing executed; the script itself is copied
-  next to it for download.
+The pages are written to be read on GitHub as well as on the site; these hooks bridge the
+two.
+
+* **Examples.** The pages ``docs/examples/<name>.md`` are rendered, with the outputs and
+  figures of a run, from ``examples/<name>.py`` by ``docs/render_examples.py`` (committed;
+  ``tests/test_docs_site.py`` checks that each page was rendered from its script as it is
+  now). The scripts themselves are copied into the site as ``examples/<name>.py``, so the
+  pages' download links work there too.
 * **Record links.** The pages link to record directories (``results/paper_protocol/``) and
-  to record files left out of the site (``exclude_docs``: ``.pt``, ``.json``, ...), which
+  to record files left out of the site (``exclude_docs``: ``.pt``, ``.csv``, ...), which
   browse fine on GitHub but are not pages. Such a link becomes a link to the directory's
-  ``README.md`` page where there is one, else a link into the repository (``repo_url``,
-  when set), else its text followed by the path as code.
+  ``README.md`` page where there is one, else a link into the repository (``repo_url``).
+  A link to a file of the repository outside ``docs/`` (``../examples/quickstart.py``,
+  ``../CITATION.cff``) goes to the site's copy of it if there is one, else into the
+  repository. A file counts as part of the site only if the build includes it: MkDocs'
+  ``Files.get_file_from_path`` also returns excluded files.
+* **No unresolved link.** MkDocs reports a link to an excluded file at INFO level only, which
+  ``--strict`` lets pass; here such a line is raised to a WARNING, so a strict build fails
+  on it (``tests/test_docs_site.py`` builds the site and fails on any link line).
 * **GitHub's lists.** The pages are written for GitHub, where a list may follow a paragraph
   or a table line directly and a nested list may be indented by 2 spaces; Python-Markdown
   needs a blank line before the list and 4 spaces. Outside code blocks, such a list gets
   the blank line and such a nested item the 4 spaces (:func:`gfm_lists`).
-* **Sphinx roles.** Docstrings cite code as ``:class:`~swimrl.env.EnvParams```; the API pages
-  show the role's target as code, without the role.
+* **Sphinx roles.** Docstrings cite code as ``:class:`~swimrl.env.EnvParams```; on the API
+  pages such a role becomes a cross-reference (mkdocs-autorefs) to the object's entry,
+  resolved like Sphinx: absolute, or relative to the object whose docstring it is in and its
+  parents; ``~`` shows the last name only. A target the API pages do not show (private, or
+  outside swimrl) stays code.
+* **Changelog.** ``CHANGELOG.md`` (repository root) is also the page ``changelog.md``.
 """
 
 from __future__ import annotations
 
+import functools
+import logging
 import posixpath
 import re
 from pathlib import Path
@@ -26,81 +42,104 @@ from pathlib import Path
 from mkdocs.structure.files import File, Files
 
 EXAMPLES = "examples"
-CELL = re.compile(r"^# %%(.*)$")
 # [text](target) with a relative target: no scheme, no leading '/' or '#'
 LINK = re.compile(r"(?<!!)\[(?P<text>[^\]]*)\]\((?P<target>(?![a-z][a-z0-9+.-]*:|/|#)[^)\s]+)\)")
 ITEM = re.compile(r"^(?P<indent> *)(?P<marker>[*+-]|\d+[.)]) +\S")
-ROLE = re.compile(r":(?:py:)?(?:mod|class|func|meth|attr|data|obj|exc|const):(<code>)~?")
+ROLE = re.compile(
+    r":(?:py:)?(?:mod|class|func|meth|attr|data|obj|exc|const):<code>(?P<target>[^<]+)</code>")
+HEADING_ID = re.compile(r'<h\d id="(?P<id>swimrl(?:\.\w+)*)"[^>]*class="doc doc-heading')
+#: MkDocs' message for a link to a file that the build leaves out (logged at INFO).
+EXCLUDED_LINK = "which is excluded from the built site"
+#: The branch the repository links point at.
+BRANCH = "main"
 
 
-# -- examples ---------------------------------------------------------------------------------
-def percent_to_markdown(source: str, name: str) -> str:
-    """The Markdown page of a percent-format script ``source`` (file name ``name``)."""
-    cells: list[tuple[str, list[str]]] = []
-    kind, lines = "code", []
-    for line in source.splitlines():
-        m = CELL.match(line)
-        if m:
-            cells.append((kind, lines))
-            kind = "markdown" if "[markdown]" in m.group(1) or "[md]" in m.group(1) else "code"
-            lines = []
-        else:
-            lines.append(line)
-    cells.append((kind, lines))
-    parts = []
-    for kind, lines in cells:
-        text = "\n".join(lines).strip("\n")
-        if not text.strip():
-            continue
-        if kind == "markdown":
-            parts.append("\n".join(re.sub(r"^# ?", "", x) for x in text.splitlines()))
-        else:
-            parts.append(f"```python\n{text}\n```")
-    note = (f"[Download `{name}`]({name}) · run it from the repository root, "
-            f"`python examples/{name}`, or open it as a notebook: "
-            f"`jupytext --to notebook examples/{name}`.")
-    if parts and parts[0].startswith("# "):
-        title, _, rest = parts[0].partition("\n")
-        parts[0] = f"{title}\n\n{note}\n{rest}"
-    else:
-        parts.insert(0, note)
-    return "\n\n".join(parts) + "\n"
+def repo_root(config) -> Path:
+    return Path(config.config_file_path).parent
 
 
+def in_site(files: Files, path: str) -> bool:
+    """Whether the build has the file ``path`` (relative to ``docs/``) and includes it."""
+    f = files.get_file_from_path(path)
+    return f is not None and not f.inclusion.is_excluded()
+
+
+def repo_link(config, rel: str, is_dir: bool) -> str | None:
+    """The repository's URL of ``rel`` (relative to the repository root), or None."""
+    if not config.repo_url:
+        return None
+    kind = "tree" if is_dir else "blob"
+    return f"{config.repo_url.rstrip('/')}/{kind}/{BRANCH}/{rel}"
+
+
+# -- failing on links the site cannot resolve -------------------------------------------------
+class ExcludedLinkIsAWarning(logging.Filter):
+    """Raise MkDocs' INFO line about a link to an excluded file to a WARNING."""
+
+    def filter(self, record: logging.LogRecord) -> bool:
+        if record.levelno < logging.WARNING and EXCLUDED_LINK in str(record.msg):
+            record.levelno, record.levelname = logging.WARNING, "WARNING"
+        return True
+
+
+def on_config(config):
+    log = logging.getLogger("mkdocs.structure.pages")
+    if not any(isinstance(f, ExcludedLinkIsAWarning) for f in log.filters):
+        log.addFilter(ExcludedLinkIsAWarning())
+    return config
+
+
+# -- files: the example scripts and the changelog ---------------------------------------------
 def on_files(files: Files, config) -> Files:
-    root = Path(config.config_file_path).parent / EXAMPLES
-    for script in sorted(root.glob("*.py")):
-        page = percent_to_markdown(script.read_text(encoding="utf-8"), script.name)
-        files.append(File.generated(config, f"{EXAMPLES}/{script.stem}.md", content=page))
+    root = repo_root(config)
+    for script in sorted((root / EXAMPLES).glob("*.py")):
         files.append(File.generated(config, f"{EXAMPLES}/{script.name}",
                                     abs_src_path=str(script)))
+    changelog = root / "CHANGELOG.md"
+    if changelog.is_file():
+        text = changelog.read_text(encoding="utf-8")
+        # its links are relative to the repository root; on the site the page sits in docs/
+        text = LINK.sub(lambda m: f"[{m.group('text')}](../{m.group('target')})", text)
+        files.append(File.generated(config, "changelog.md", content=text))
     return files
 
 
-# -- record links -----------------------------------------------------------------------------
+# -- record links and links out of docs/ ------------------------------------------------------
 def on_page_markdown(markdown: str, page, config, files: Files) -> str:
-    if page.file.generated_by is not None:
-        return markdown
+    root = repo_root(config)
     docs = Path(config.docs_dir)
+    docs_rel = docs.resolve().relative_to(root.resolve()).as_posix()
     here = posixpath.dirname(page.file.src_uri)
+    if page.file.generated_by is not None and page.file.src_uri == "changelog.md":
+        here = ""  # the changelog's links were made relative to docs/ in on_files
 
     def fix(m: re.Match) -> str:
-        target = m.group("target")
+        text, target = m.group("text"), m.group("target")
         path, _, anchor = target.partition("#")
+        suffix = f"#{anchor}" if anchor else ""
         rel = posixpath.normpath(posixpath.join(here, path))
-        if rel.startswith("..") or not (docs / rel).exists():
-            return m.group(0)            # left to mkdocs' own link check
-        if (docs / rel).is_file() and files.get_file_from_path(rel) is not None:
-            return m.group(0)            # a page or a file of the site
+        repo_rel = posixpath.normpath(posixpath.join(docs_rel, rel))
+        if rel.startswith("..") and repo_rel.startswith(f"{docs_rel}/"):   # back into docs/
+            rel = repo_rel[len(docs_rel) + 1:]
+            target = posixpath.relpath(rel, here or ".") + suffix
+            return fix(re.match(LINK, f"[{text}]({target})"))
+        if rel.startswith(".."):                              # a file of the repository
+            if repo_rel.startswith("..") or not (root / repo_rel).exists():
+                return m.group(0)                            # left to mkdocs' own link check
+            if repo_rel.startswith(f"{EXAMPLES}/") and in_site(files, repo_rel):
+                return f"[{text}]({posixpath.relpath(repo_rel, here or '.')}{suffix})"
+            url = repo_link(config, repo_rel, (root / repo_rel).is_dir())
+            return m.group(0) if url is None else f"[{text}]({url}{suffix})"
+        if not (docs / rel).exists():
+            return m.group(0)                                # left to mkdocs' own link check
+        if (docs / rel).is_file() and in_site(files, rel):
+            return m.group(0)                                # a page or a file of the site
         readme = posixpath.join(rel, "README.md")
-        if (docs / rel).is_dir() and files.get_file_from_path(readme) is not None:
-            new = posixpath.relpath(readme, here or ".")
-            return f"[{m.group('text')}]({new}{'#' + anchor if anchor else ''})"
-        if config.repo_url:
-            kind = "tree" if (docs / rel).is_dir() else "blob"
-            url = f"{config.repo_url.rstrip('/')}/{kind}/main/docs/{rel}"
-            return f"[{m.group('text')}]({url})"
-        text = m.group("text")
+        if (docs / rel).is_dir() and in_site(files, readme):
+            return f"[{text}]({posixpath.relpath(readme, here or '.')}{suffix})"
+        url = repo_link(config, posixpath.join(docs_rel, rel), (docs / rel).is_dir())
+        if url is not None:
+            return f"[{text}]({url})"
         if text.startswith("`") and text.endswith("`"):
             return text
         return f"{text} (`docs/{rel}{'/' if (docs / rel).is_dir() else ''}`)"
@@ -134,8 +173,70 @@ def gfm_lists(markdown: str) -> str:
     return "\n".join(out)
 
 
-# -- Sphinx roles in docstrings ---------------------------------------------------------------
+# -- Sphinx roles in docstrings -> cross-references -------------------------------------------
+@functools.cache
+def swimrl_objects(root: str):
+    """The package as griffe reads it (statically, nothing imported)."""
+    import griffe
+
+    return griffe.load("swimrl", search_paths=[root])
+
+
+def resolve(target: str, context: str, root: str) -> str | None:
+    """The documented path of the role target ``target`` seen from the object ``context``
+    (Sphinx's rules: absolute, else relative to the context and its parents), or None when
+    the API pages do not show it."""
+    pkg = swimrl_objects(root)
+    name = target.lstrip(".")
+    parts = context.split(".")
+    candidates = [name] if name.startswith("swimrl.") else []
+    candidates += [".".join([*parts[:i], name]) for i in range(len(parts), 0, -1)]
+    for path in candidates:
+        if not path.startswith("swimrl."):
+            continue
+        try:
+            obj = pkg[path[len("swimrl."):]]
+        except Exception:  # noqa: BLE001 - not there, or through an alias griffe cannot follow
+            continue
+        path = obj.target_path if obj.is_alias else obj.path
+        try:
+            if obj.is_alias:
+                obj = pkg[path[len("swimrl."):]]
+            # what mkdocstrings shows: an object with a docstring (a module or class: with
+            # one in it), outside the commands, none of its names private
+            documented = obj.has_docstrings if obj.kind.value in ("module", "class") \
+                else bool(obj.docstring)
+        except Exception:  # noqa: BLE001 - outside swimrl, or an alias griffe cannot follow
+            return None
+        shown = path.startswith("swimrl.") and not path.startswith("swimrl.cli")
+        if documented and shown and not any(p.startswith("_") for p in path.split(".")):
+            return path
+        return None
+    return None
+
+
 def on_page_content(html: str, page, config, files: Files) -> str:
     if not page.file.src_uri.startswith("api/"):
         return html
-    return ROLE.sub(r"\1", html)
+    root = str(repo_root(config))
+    headings = [(m.start(), m.group("id")) for m in HEADING_ID.finditer(html)]
+
+    def context_at(pos: int) -> str:
+        ctx = "swimrl"
+        for start, ident in headings:
+            if start > pos:
+                break
+            ctx = ident
+        return ctx
+
+    def role(m: re.Match) -> str:
+        raw = m.group("target")
+        short = raw.startswith("~")
+        target = raw.lstrip("~")
+        shown = target.lstrip(".").split(".")[-1] if short else target
+        path = resolve(target, context_at(m.start()), root)
+        if path is None:
+            return f"<code>{shown}</code>"
+        return f'<autoref identifier="{path}"><code>{shown}</code></autoref>'
+
+    return ROLE.sub(role, html)

@@ -1,7 +1,141 @@
 """swimrl: shape-changing microswimmers navigating 2D flows, with TorchRL.
 
-Physics spec: Qiu, Piro, Biferale, Cencini, Mehlig, Gustavsson,
-"Adaptive shape control for microswimmer navigation in turbulence".
+Physics spec: Qiu, Piro, Biferale, Cencini, Mehlig & Gustavsson, *Adaptive shape control for
+microswimmer navigation in turbulence*, arXiv:2603.08201.
+
+The names below are the public API, importable from ``swimrl`` directly::
+
+    from swimrl import EnvParams, Runtime, StochasticSpec, SwimmerEnv, load_policy
+
+    params = EnvParams()                          # the paper's swimmer and episode
+    runtime = Runtime.from_names("cpu", "float32", threads=1)
+    env = SwimmerEnv.build(StochasticSpec(kubo=10.0), params, runtime, n_flows=2,
+                           n_swimmers=100, seed=0)
+    td = env.rollout(params.n_decisions, load_policy("pretrained/ku10", params))
+    print(env.score(td[..., -1]["next"]).mean())  # R_hat, eq. (6) of the paper
+
+``import swimrl`` stays light (no torch): each name is imported from its module on first
+use.
 """
 
+from __future__ import annotations
+
+import importlib
+from typing import TYPE_CHECKING
+
 __version__ = "0.1.0"
+
+#: Public name -> the module that defines it, in the order of the API reference: the
+#: environment, flows, physics, policies, evaluation, training, errors.
+_EXPORTS: dict[str, str] = {
+    # environment (swimrl.env, swimrl.task, swimrl.runtime)
+    "SwimmerEnv": "swimrl.env",
+    "EnvParams": "swimrl.env",
+    "TaskSpec": "swimrl.task",
+    "RewardSpec": "swimrl.task",
+    "Runtime": "swimrl.runtime",
+    # flows
+    "StochasticSpec": "swimrl.flows.build",
+    "StoredRunSpec": "swimrl.flows.build",
+    "LiveDNSSpec": "swimrl.flows.build",
+    "build_flow": "swimrl.flows.build",
+    "GriddedFlow": "swimrl.flows.base",
+    "CHANNELS": "swimrl.flows.base",
+    # physics
+    "SIGNAL_NAMES": "swimrl.physics.signals",
+    "compute_signals": "swimrl.physics.signals",
+    "swimmer_rhs": "swimrl.physics.swimmer",
+    "heun_step": "swimrl.physics.swimmer",
+    "drag_factor": "swimrl.physics.energy",
+    # policies
+    "load_policy": "swimrl.policies.files",
+    "StrategySpec": "swimrl.policies.baselines",
+    "build_strategy": "swimrl.policies.baselines",
+    "NaiveShape": "swimrl.policies.baselines",
+    "ShortTimeOptimal": "swimrl.policies.baselines",
+    "MinimalModel": "swimrl.policies.baselines",
+    # evaluation
+    "EvalSetup": "swimrl.evaluation.rollout",
+    "EvalSizes": "swimrl.evaluation.rollout",
+    "evaluate": "swimrl.evaluation.rollout",
+    "evaluate_shared": "swimrl.evaluation.rollout",
+    "CompareConfig": "swimrl.evaluation.compare",
+    "compare": "swimrl.evaluation.compare",
+    # training
+    "TrainConfig": "swimrl.rl.plan",
+    "train": "swimrl.rl.run",
+    # errors
+    "ConfigError": "swimrl.errors",
+}
+
+__all__ = [
+    "__version__",
+    "SwimmerEnv",
+    "EnvParams",
+    "TaskSpec",
+    "RewardSpec",
+    "Runtime",
+    "StochasticSpec",
+    "StoredRunSpec",
+    "LiveDNSSpec",
+    "build_flow",
+    "GriddedFlow",
+    "CHANNELS",
+    "SIGNAL_NAMES",
+    "compute_signals",
+    "swimmer_rhs",
+    "heun_step",
+    "drag_factor",
+    "load_policy",
+    "StrategySpec",
+    "build_strategy",
+    "NaiveShape",
+    "ShortTimeOptimal",
+    "MinimalModel",
+    "EvalSetup",
+    "EvalSizes",
+    "evaluate",
+    "evaluate_shared",
+    "CompareConfig",
+    "compare",
+    "TrainConfig",
+    "train",
+    "ConfigError",
+]
+
+if TYPE_CHECKING:  # for type checkers and the API reference; at run time: __getattr__
+    from swimrl.env import EnvParams, SwimmerEnv
+    from swimrl.errors import ConfigError
+    from swimrl.evaluation.compare import CompareConfig, compare
+    from swimrl.evaluation.rollout import EvalSetup, EvalSizes, evaluate, evaluate_shared
+    from swimrl.flows.base import CHANNELS, GriddedFlow
+    from swimrl.flows.build import LiveDNSSpec, StochasticSpec, StoredRunSpec, build_flow
+    from swimrl.physics.energy import drag_factor
+    from swimrl.physics.signals import SIGNAL_NAMES, compute_signals
+    from swimrl.physics.swimmer import heun_step, swimmer_rhs
+    from swimrl.policies.baselines import (
+        MinimalModel,
+        NaiveShape,
+        ShortTimeOptimal,
+        StrategySpec,
+        build_strategy,
+    )
+    from swimrl.policies.files import load_policy
+    from swimrl.rl.plan import TrainConfig
+    from swimrl.rl.run import train
+    from swimrl.runtime import Runtime
+    from swimrl.task import RewardSpec, TaskSpec
+
+
+def __getattr__(name: str):
+    """Import a public name from its module on first use (:data:`_EXPORTS`)."""
+    module = _EXPORTS.get(name)
+    if module is None:
+        raise AttributeError(f"module 'swimrl' has no attribute {name!r}")
+    value = getattr(importlib.import_module(module), name)
+    globals()[name] = value
+    return value
+
+
+def __dir__() -> list[str]:
+    return sorted(set(globals()) | set(_EXPORTS))

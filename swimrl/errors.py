@@ -18,7 +18,12 @@ from contextlib import contextmanager
 
 
 class ConfigError(ValueError):
-    """A config value outside its allowed range (one line naming key, value and range)."""
+    """A config value outside its allowed range (one line naming key, value and range).
+
+    Raised by the constructors of the typed configs (:class:`~swimrl.env.EnvParams`,
+    :class:`~swimrl.flows.build.StochasticSpec`, ...) before any compute; the commands print
+    it as one line and exit with status 2.
+    """
 
 
 class BadFileError(ValueError):

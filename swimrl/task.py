@@ -40,7 +40,18 @@ TASKS = ("displacement", "target")
 class TaskSpec:
     """``task.*``: the task's name, the target distance ``D`` and the arrival radius (both in
     units of ``ell_f``; read by ``task=target`` only). The defaults are
-    ``conf/task/displacement.yaml``'s (``tests/test_config_sources.py``)."""
+    ``conf/task/displacement.yaml``'s (``tests/test_config_sources.py``).
+
+    Parameters
+    ----------
+    name
+        ``displacement`` (the paper's: get far from the start) or ``target``
+        (point-to-point navigation), one of :data:`TASKS`.
+    distance
+        ``task=target``: the distance ``D`` of each swimmer's target from its start.
+    arrival_radius
+        ``task=target``: a swimmer this close to its target has arrived, ``< distance``.
+    """
 
     name: str = "displacement"
     distance: float = 20.0
@@ -64,7 +75,16 @@ class TaskSpec:
 class RewardSpec:
     """``reward.*``: weights of the energy cost ``w K(Lambda) v_s T_u`` and of the
     shape-change cost ``w_c |Delta Lambda| v_s T_u`` per decision (0: the paper's reward).
-    The defaults are ``conf/evaluate.yaml``'s."""
+    The defaults are ``conf/evaluate.yaml``'s.
+
+    Parameters
+    ----------
+    energy_weight
+        ``w >= 0``: the cost of the drag of the shape, ``K(Lambda)``
+        (:func:`~swimrl.physics.energy.drag_factor`).
+    shape_change_weight
+        ``w_c >= 0``: the cost of changing the shape between decisions.
+    """
 
     energy_weight: float = 0.0
     shape_change_weight: float = 0.0

@@ -54,7 +54,8 @@ def no_host_sync():
             setattr(torch.Tensor, name, method)
 
 
-def _env(task: TaskSpec = TaskSpec(), kernel: str = "eager", **params) -> SwimmerEnv:
+def _env(task: TaskSpec | None = None, kernel: str = "eager", **params) -> SwimmerEnv:
+    task = TaskSpec() if task is None else task
     gen = torch.Generator().manual_seed(3)
     flow = StochasticFlow(2, 10.0, n_grid=64, spacing=0.1, generator=gen)
     p = EnvParams(task=task, **{"duration": 1.0, **params})

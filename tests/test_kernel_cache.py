@@ -1,5 +1,5 @@
 """The fused kernel's build is keyed by its source: two source trees on one machine keep
-their own builds (no cross rebuild), and a build says so in one log line. A lock file left
+their own builds (no cross rebuild), and a build says so in one line on stderr. A lock file left
 by a killed process never makes a later run wait forever."""
 
 from __future__ import annotations

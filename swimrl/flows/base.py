@@ -19,8 +19,8 @@ import torch
 from swimrl.flows.grid import PeriodicGrid
 from swimrl.flows.interpolation import bilinear_periodic
 
-#: The five flow channels every flow provides, in this order.
 CHANNELS: tuple[str, ...] = ("u_x", "u_y", "S_xx", "S_xy", "omega")
+"""The five flow channels every flow provides, in this order."""
 N_CHANNELS = len(CHANNELS)
 
 
@@ -59,7 +59,20 @@ class GriddedFlow:
     realisation; several flows may share a row (a replay in which they replay the same run
     from the same time): :meth:`rows` maps flows to rows (the identity by default,
     ``R = F``). ``u_rms`` and ``tau_k`` are the flow's reference scales (ensemble values) in
-    its own units.
+    its own units. A new flow is a subclass (``docs/extending.md``).
+
+    Parameters
+    ----------
+    grid
+        The periodic node grid of the basis fields.
+    n_flows
+        ``F``, the realisations.
+    n_basis
+        ``M``, the basis fields per realisation.
+    device, dtype
+        Where and in which precision the basis is kept.
+    n_rows
+        ``R``, the basis rows (default ``F``).
     """
 
     u_rms: float = 1.0

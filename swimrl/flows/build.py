@@ -46,6 +46,27 @@ class StochasticSpec:
     ``basis``, ``basis_seed``, ``amplitudes``, ``velocity_scale``: readings of the paper's
     text, defaults as written (:mod:`swimrl.flows.stochastic`). The defaults (for library
     calls) are ``conf/flow/stochastic.yaml``'s values (``tests/test_config_sources.py``).
+
+    Parameters
+    ----------
+    kubo
+        ``Ku = tau_f u_rms / ell_f`` (the paper: 0.1, 1, 10, 1e7).
+    n_modes
+        ``M``, the stream-function components (the paper: 5).
+    n_grid
+        Grid nodes per side (the paper: 400).
+    spacing
+        Grid spacing in units of ``ell_f`` (the paper: 0.025; box ``n_grid * spacing``).
+    basis
+        ``redrawn`` (new components per flow) or ``fixed`` (one set, from ``basis_seed``).
+    basis_seed
+        The seed of the fixed components.
+    amplitudes
+        ``stationary`` (``c_i(0) ~ N(0, 1/M)``) or ``normalised`` (on the unit sphere).
+    velocity_scale
+        ``total`` (``v_s`` and Ku against ``<u.u>^{1/2}``) or ``component``.
+    name
+        The config group's name.
     """
 
     kubo: float
@@ -76,7 +97,21 @@ class StoredRunSpec:
     """``flow=dns_replay``: runs stored by ``swimrl-dns`` at ``paths`` (one or several
     independent realisations), decoded on ``decode_n`` nodes per side (None: the run's
     grid), ``flows_per_start`` flows sharing each drawn (run, start time). The defaults are
-    ``conf/flow/dns_replay.yaml``'s (``tests/test_config_sources.py``)."""
+    ``conf/flow/dns_replay.yaml``'s (``tests/test_config_sources.py``).
+
+    Parameters
+    ----------
+    paths
+        The zarr stores (``flow.path``), each a finished run of ``swimrl-dns``.
+    allow_incomplete
+        Replay what an unfinished store holds.
+    decode_n
+        Nodes per side the stored modes are decoded on (None: the run's grid).
+    flows_per_start
+        Flows that share each drawn (run, start time).
+    name
+        The config group's name.
+    """
 
     paths: tuple[Path, ...]
     allow_incomplete: bool = False
@@ -110,7 +145,20 @@ class StoredRunSpec:
 
 @dataclass(frozen=True)
 class LiveDNSSpec:
-    """``flow=dns``: one DNS realisation per flow, spun up, then stepped with the swimmers."""
+    """``flow=dns``: one DNS realisation per flow, spun up, then stepped with the swimmers.
+
+    Parameters
+    ----------
+    dns
+        The solver's parameters (``conf/solver/dns.yaml``).
+    spinup_time, measure_time
+        The spin-up from rest and its final part over which ``u_rms`` and ``tau_K`` are
+        measured (code time units).
+    interval_tau_k
+        The interval between the snapshots the swimmers see, in units of ``tau_K``.
+    name
+        The config group's name.
+    """
 
     dns: DNSParams
     spinup_time: float
@@ -180,8 +228,27 @@ def build_flow(
     interval: float,
     duration: float,
 ) -> GriddedFlow:
-    """``n_flows`` realisations of ``spec``; ``interval`` ``T_u`` and ``duration`` ``T`` in
-    units of ``tau_K`` (used by the replayed flows)."""
+    """``n_flows`` realisations of ``spec``.
+
+    Parameters
+    ----------
+    spec
+        The flow: :class:`StochasticSpec`, :class:`StoredRunSpec` or :class:`LiveDNSSpec`.
+    n_flows
+        Independent realisations (the environment's first batch dimension).
+    device, dtype
+        Where and in which precision the fields are kept.
+    generator
+        The random generator of the realisations.
+    interval, duration
+        ``T_u`` and ``T`` in units of ``tau_K`` (used by the replayed flows).
+
+    Returns
+    -------
+    GriddedFlow
+        The flow (:class:`~swimrl.flows.stochastic.StochasticFlow` or
+        :class:`~swimrl.flows.replay.ReplayFlow`), its realisations drawn.
+    """
     common = {"device": device, "dtype": dtype, "generator": generator}
     if isinstance(spec, StochasticSpec):
         return StochasticFlow(

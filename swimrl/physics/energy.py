@@ -91,6 +91,16 @@ def drag_factor(shape_factor: torch.Tensor | float) -> torch.Tensor | float:
 
     ``Lambda`` in ``(-1, 1)``. A tensor is evaluated in float64 on its device and returned in
     its dtype and shape; a float gives a float.
+
+    Parameters
+    ----------
+    shape_factor
+        ``Lambda`` in ``(-1, 1)``, a tensor or a float.
+
+    Returns
+    -------
+    torch.Tensor or float
+        ``K(Lambda)``: 1 for the sphere, least (0.9555) at ``Lambda = 0.584``.
     """
     if not isinstance(shape_factor, torch.Tensor):
         return float(drag_factor(torch.tensor(float(shape_factor), dtype=torch.float64)))

@@ -18,17 +18,30 @@ import torch
 from swimrl.errors import ConfigError
 from swimrl.physics.swimmer import strain_nn, strain_np
 
-#: All signal names, in the order of the ``signals`` key of the environment.
 SIGNAL_NAMES: tuple[str, ...] = ("n_r", "n_theta", "S_nn", "S_np", "omega")
+"""All signal names, in the order of the ``signals`` key of the environment."""
 
 
 def compute_signals(
     q: torch.Tensor, theta: torch.Tensor, displacement: torch.Tensor, tau_k: float
 ) -> torch.Tensor:
-    """All five signals ``(n_r, n_theta, S_nn tau_K, S_np tau_K, omega tau_K)``, shape ``(..., 5)``.
+    """All five signals ``(n_r, n_theta, S_nn tau_K, S_np tau_K, omega tau_K)`` (Sec. II C).
 
-    ``q`` are flow channels ``(..., 5)``, ``theta`` the orientation angle, ``displacement``
-    ``(..., 2)`` is ``x - x_0``.
+    Parameters
+    ----------
+    q
+        Flow channels ``(u_x, u_y, S_xx, S_xy, omega)`` at the swimmers, ``(..., 5)``.
+    theta
+        Orientation angles, ``(...)``.
+    displacement
+        ``x - x_0``, ``(..., 2)``: its direction is ``e_r`` (``n`` at the start point).
+    tau_k
+        The flow's ``tau_K``, the unit of the strain and vorticity signals.
+
+    Returns
+    -------
+    torch.Tensor
+        ``(..., 5)``, in the order of :data:`SIGNAL_NAMES`.
     """
     n = torch.stack((torch.cos(theta), torch.sin(theta)), -1)
     r = displacement.norm(dim=-1, keepdim=True)

@@ -37,10 +37,26 @@ def strain_nn(theta: torch.Tensor, s_xx: torch.Tensor, s_xy: torch.Tensor) -> to
 def swimmer_rhs(
     q: torch.Tensor, theta: torch.Tensor, shape_factor: torch.Tensor, swim_speed: float
 ) -> tuple[torch.Tensor, torch.Tensor]:
-    """Right-hand side ``(dx/dt, dtheta/dt)`` from flow channels ``q = (u_x,u_y,S_xx,S_xy,omega)``.
+    """Right-hand side ``(dx/dt, dtheta/dt)`` of the paper's eqs. (1a) and (2).
 
     ``dx/dt = u + v_s (cos theta, sin theta)``;
     ``dtheta/dt = omega/2 + Lambda (S_xy cos 2theta - S_xx sin 2theta)``.
+
+    Parameters
+    ----------
+    q
+        Flow channels ``(u_x, u_y, S_xx, S_xy, omega)`` at the swimmers, ``(P, 5)``.
+    theta
+        Orientation angles, ``(P,)``.
+    shape_factor
+        ``Lambda`` of each swimmer, ``(P,)`` (or a scalar).
+    swim_speed
+        ``v_s`` in the flow's units.
+
+    Returns
+    -------
+    tuple[torch.Tensor, torch.Tensor]
+        ``dx/dt`` ``(P, 2)`` and ``dtheta/dt`` ``(P,)``.
     """
     c, s = torch.cos(theta), torch.sin(theta)
     vel = q[:, 0:2] + swim_speed * torch.stack((c, s), -1)
@@ -59,11 +75,27 @@ def heun_step(
     dt: float,
     rot_kick: torch.Tensor | None = None,
 ) -> tuple[torch.Tensor, torch.Tensor]:
-    """One Heun step of ``(x, theta)`` over ``[t, t + dt]``.
+    """One Heun step of ``(x, theta)`` over ``[t, t + dt]``, ``Lambda`` held.
 
-    ``sample(pos)`` returns flow channels at the current flow time; ``advance()`` moves the
-    flow from ``t`` to ``t + dt`` between the two stages. ``rot_kick`` is the rotational
-    noise increment ``sqrt(2 D_r dt) xi`` for this step (or None).
+    Parameters
+    ----------
+    sample
+        ``sample(pos)``: the flow channels ``(P, 5)`` at ``pos`` at the current flow time.
+    advance
+        ``advance()``: moves the flow from ``t`` to ``t + dt``, between the two stages.
+    pos, theta
+        Positions ``(P, 2)`` and orientation angles ``(P,)`` at ``t``.
+    shape_factor
+        ``Lambda`` of each swimmer.
+    swim_speed, dt
+        ``v_s`` and the step, in the flow's units.
+    rot_kick
+        The rotational noise increment ``sqrt(2 D_r dt) xi`` of this step (or None).
+
+    Returns
+    -------
+    tuple[torch.Tensor, torch.Tensor]
+        Positions and angles at ``t + dt``.
     """
     v1, w1 = swimmer_rhs(sample(pos), theta, shape_factor, swim_speed)
     pos_p = pos + dt * v1

@@ -34,7 +34,14 @@ _LABEL = re.compile(r"(\w+)\((.*)\)", re.DOTALL)
 
 
 class NaiveShape(nn.Module):
-    """Constant shape factor ``Lambda = shape_factor``."""
+    """The naive strategy: a constant shape factor ``Lambda = shape_factor`` (the paper's naive
+    baseline: 0.98, Sec. III A).
+
+    Parameters
+    ----------
+    shape_factor
+        The constant ``Lambda``.
+    """
 
     def __init__(self, shape_factor: float):
         super().__init__()
@@ -45,7 +52,14 @@ class NaiveShape(nn.Module):
 
 
 class ShortTimeOptimal(nn.Module):
-    """STO (``eq:sto``): ``Lambda = -Lambda_max sign(n_theta) sign(S_np)``."""
+    """Short-time optimisation (the paper's eq. 10, ``eq:sto``):
+    ``Lambda = -Lambda_max sign(n_theta) sign(S_np)``, read from the ``signals`` key.
+
+    Parameters
+    ----------
+    shape_factor_max
+        ``Lambda_max``.
+    """
 
     def __init__(self, shape_factor_max: float):
         super().__init__()
@@ -68,7 +82,17 @@ def minimal_model(signals: torch.Tensor, coeffs: Sequence[float] | torch.Tensor,
 
 
 class MinimalModel(nn.Module):
-    """The paper's four-term minimal analytical model ``eq:fit`` with coefficients c1..c4."""
+    """The paper's four-term minimal analytical model (eq. 13, ``eq:fit``):
+    ``Lambda = Lambda_max tanh[-c1 n_theta sgn S_np - c2 H(n_r) omega tau_K sgn S_np
+    + c3 n_r - c4 tanh(S_nn tau_K)]``.
+
+    Parameters
+    ----------
+    coeffs
+        ``c1..c4`` (``swimrl-fit-minimal`` fits them to a strategy).
+    shape_factor_max
+        ``Lambda_max``.
+    """
 
     def __init__(self, coeffs: Sequence[float], shape_factor_max: float):
         super().__init__()
@@ -90,7 +114,17 @@ def as_actor(module: nn.Module) -> TensorDictModule:
 @dataclass(frozen=True)
 class StrategySpec:
     """``strategy=NAME``: ``naive`` (with ``shape_factor``), ``sto``, ``minimal`` (with
-    ``coeffs`` c1..c4) or ``policy`` (a trained policy, loaded by :mod:`.files`)."""
+    ``coeffs`` c1..c4) or ``policy`` (a trained policy, loaded by :mod:`.files`).
+
+    Parameters
+    ----------
+    name
+        One of :data:`STRATEGIES`.
+    shape_factor
+        ``naive``: the constant ``Lambda``, in ``(-1, 1)``.
+    coeffs
+        ``minimal``: ``(c1, c2, c3, c4)``.
+    """
 
     name: str
     shape_factor: float | None = None
@@ -117,7 +151,21 @@ class StrategySpec:
 
 def build_strategy(spec: StrategySpec, action_spec: Bounded) -> TensorDictModule:
     """Baseline actor for ``spec``; ``Lambda_max`` is the upper bound of the environment's
-    (unbatched) action spec."""
+    (unbatched) action spec.
+
+    Parameters
+    ----------
+    spec
+        ``naive``, ``sto`` or ``minimal`` (a policy is loaded with
+        :func:`~swimrl.policies.files.load_policy`).
+    action_spec
+        The environment's ``action_spec_unbatched``.
+
+    Returns
+    -------
+    TensorDictModule
+        ``signals -> action``, the policy of TorchRL's ``env.rollout(n, policy)``.
+    """
     lam_max = action_bounds(action_spec)[1]
     if spec.name == "naive":
         return as_actor(NaiveShape(spec.shape_factor))

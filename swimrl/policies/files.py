@@ -313,7 +313,30 @@ def check_signals(spec: str, trained: list[str], signals: tuple[str, ...]) -> No
 def load_policy(spec: str, params: EnvParams) -> TensorDictModule:
     """Deterministic actor ``observation -> action`` of the policy named by ``spec``, checked
     against the evaluation's signals ``params.signals``. The actor keeps the bound
-    ``Lambda_max`` it was trained with (the environment clamps to its own)."""
+    ``Lambda_max`` it was trained with (the environment clamps to its own).
+
+    Parameters
+    ----------
+    spec
+        ``pretrained/NAME`` (a shipped policy: ``ku0.1``, ``ku1``, ``ku10``, ``ku1e7``,
+        ``dns``), a run directory (its ``policy.pt``, else ``checkpoints/last.pt``) or a
+        policy or checkpoint file.
+    params
+        The environment's parameters: its ``signals`` must be those the policy was trained
+        on (else a one-line :class:`~swimrl.errors.ConfigError` naming the right
+        ``signals=`` choice).
+
+    Returns
+    -------
+    TensorDictModule
+        The actor's mean, ``tanh``-bounded, in evaluation mode without gradients: the policy
+        of TorchRL's ``env.rollout(n, policy)``.
+
+    Raises
+    ------
+    FileNotFoundError
+        No such policy.
+    """
     path = resolve_policy_file(spec)
     data = load_file(path, map_location="cpu")
     check_signals(spec, data["signals"], params.signals)

@@ -18,6 +18,7 @@ from __future__ import annotations
 import functools
 import hashlib
 import logging
+import sys
 import time
 from pathlib import Path
 
@@ -53,7 +54,9 @@ def build_cpu_kernel(source: Path = SOURCE):
     if library.is_file():  # torch's own loader for a finished build, without its build step
         return _import_module_from_library(name, str(built), True)
     remove_stale_lock(built / "lock")
-    log.info("building the fused kernel (once, ~30 s) in %s", built)
+    # one line on stderr, whatever the logging setup: the first call waits ~30 s for this
+    print(f"swimrl: building the fused kernel (once, ~30 s) in {built}", file=sys.stderr,
+          flush=True)
     return load(name=name, sources=[str(source)], extra_cflags=list(CFLAGS), verbose=False)
 
 
