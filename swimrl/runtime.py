@@ -68,7 +68,21 @@ class Runtime:
     ``kernel`` (``auto`` | ``eager`` | ``fused`` | ``compiled``), checked on construction.
     The default ``kernel`` is the configs' (``tests/test_config_sources.py``); ``threads``
     differs between commands (``conf/evaluate.yaml``: all cores, ``conf/train.yaml``: 1)
-    and has none."""
+    and has none.
+
+    Parameters
+    ----------
+    device
+        Where flows, swimmers and networks live (``cpu``, ``cuda``, ``cuda:N``).
+    dtype
+        ``torch.float32`` (default) or ``torch.float64``.
+    threads
+        ``torch.set_num_threads`` (:meth:`apply`); None: all cores.
+    kernel
+        The decision-interval integrator (:func:`swimrl.physics.integrator.select_kernel`):
+        ``auto`` (fused C++ on the CPU, compiled elsewhere), ``eager``, ``fused`` or
+        ``compiled``.
+    """
 
     device: torch.device
     dtype: torch.dtype

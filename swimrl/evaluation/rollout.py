@@ -48,7 +48,21 @@ Actor = StrategySpec | TensorDictModule
 class EvalSizes:
     """``eval.*``: flows, swimmers per flow, flows simulated at once, progress bar, and the
     number of swimmers per flow whose every decision is recorded (``record``, 0: none; see
-    :mod:`swimrl.evaluation.trajectories`)."""
+    :mod:`swimrl.evaluation.trajectories`).
+
+    Parameters
+    ----------
+    n_flows
+        Flow realisations (paper: 100).
+    n_swimmers
+        Swimmers per flow (paper: 1000), from uniformly random starts.
+    flows_per_batch
+        Realisations simulated at once (one chunk; memory ~16 MB each at the paper's grid).
+    progress
+        A tqdm bar over the decisions.
+    record
+        Swimmers per flow whose every decision goes to ``trajectories.npz``.
+    """
 
     n_flows: int
     n_swimmers: int
@@ -68,7 +82,24 @@ class EvalSizes:
 @dataclass(frozen=True)
 class EvalSetup:
     """Where and how strategies are evaluated; ``record`` (the resolved config) is written
-    into the results."""
+    into the results.
+
+    Parameters
+    ----------
+    flow
+        The flow (:class:`~swimrl.flows.build.StochasticSpec`, a stored or live DNS spec).
+    params
+        Swimmer, episode, signals, task and reward (:class:`~swimrl.env.EnvParams`).
+    runtime
+        Device, dtype, threads, kernel (:class:`~swimrl.runtime.Runtime`).
+    sizes
+        Flows, swimmers, chunking (:class:`EvalSizes`).
+    seed
+        Chunk ``c`` of the flows is drawn from ``SeedSequence([seed, c])``: the same seed
+        gives every strategy the same flows and starts.
+    record
+        The resolved config, copied into every result.
+    """
 
     flow: FlowSpec
     params: EnvParams
@@ -222,7 +253,26 @@ def evaluate_shared(setup: EvalSetup, actors: Sequence[Actor], desc: str = "eval
     ``0 .. len(done) - 1``, which are not simulated again; the per-flow results are the
     uninterrupted evaluation's, and the times add up over the legs. ``preemption``: see
     :func:`run_episodes` (:class:`~.jobs.EvaluationInterruptedError` inside a chunk; the chunks
-    handed to ``on_chunk`` before it stand)."""
+    handed to ``on_chunk`` before it stand).
+
+    Parameters
+    ----------
+    setup
+        Flow, physics, runtime, sizes and seed (:class:`EvalSetup`).
+    actors
+        Baselines (:class:`~swimrl.policies.baselines.StrategySpec`) or actor modules (e.g.
+        :func:`~swimrl.policies.files.load_policy`), one block of swimmers each.
+    desc, recorder, done, on_chunk, preemption
+        Progress label; trajectory recorder; chunk results to reuse; callback after each
+        chunk; the signal flag read between decisions.
+
+    Returns
+    -------
+    list of dict
+        Per actor: ``R_hat_mean``, ``R_hat_std``, ``R_hat_sem`` (over flows), ``per_flow``,
+        ``energy_mean`` and the task's outcomes, ``flow_stats`` (measured ``u_rms``,
+        ``tau_K``), sizes, seed, timings and the config record.
+    """
     sizes, params = setup.sizes, setup.params
     setup.runtime.apply()
     n_flows, s, k = sizes.n_flows, sizes.n_swimmers, len(actors)
@@ -289,7 +339,25 @@ def evaluate(setup: EvalSetup, actor: Actor, strategy: str,
              recorder: TrajectoryRecorder | None = None,
              preemption: Preemption | None = None) -> dict:
     """Metrics of one strategy (named ``strategy`` in the record) on ``setup``; stopped
-    between two decisions by ``preemption`` (:class:`~.jobs.EvaluationInterruptedError`)."""
+    between two decisions by ``preemption`` (:class:`~.jobs.EvaluationInterruptedError`).
+
+    Parameters
+    ----------
+    setup
+        Flow, physics, runtime, sizes and seed (:class:`EvalSetup`).
+    actor
+        A baseline spec or an actor module (:func:`~swimrl.policies.files.load_policy`).
+    strategy
+        Its name in the record.
+    recorder, preemption
+        Optional trajectory recorder; the signal flag read between decisions.
+
+    Returns
+    -------
+    dict
+        ``strategy`` and the metrics of :func:`evaluate_shared` (``R_hat_mean``,
+        ``R_hat_sem``, ``per_flow``, ...).
+    """
     (m,) = evaluate_shared(setup, [actor], desc=f"eval {strategy}", recorder=recorder,
                            preemption=preemption)
     return {"strategy": strategy, **m}

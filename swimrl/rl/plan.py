@@ -160,7 +160,24 @@ class OptimSettings:
 @dataclass(frozen=True)
 class TrainConfig:
     """``swimrl-train``: the evaluation setup (physics, flow, final evaluation) and the PPO
-    settings; the attribute names follow the config groups (``cfg.loss.gamma``, ...)."""
+    settings; the attribute names follow the config groups (``cfg.loss.gamma``, ...).
+    Built from a composed Hydra config by :func:`swimrl.config.train_config`, which checks
+    every value first.
+
+    Parameters
+    ----------
+    evaluation
+        The flow, swimmer and episode parameters, runtime, final-evaluation sizes and seed
+        (:class:`~swimrl.evaluation.rollout.EvalSetup`).
+    train, loss, optim, model
+        ``train.*`` (sizes, budget, cadence), ``loss.*`` (``ClipPPOLoss`` and ``GAE``),
+        ``optim.*`` (Adam, annealing, clipping), ``model.*`` (networks).
+    resume, overwrite
+        Continue from ``<run>/checkpoints/last.pt``; or replace a previous run.
+    eval_flow
+        A flow for every evaluation that differs from the training flow (held-out DNS
+        runs); None: the training flow with held-out seeds.
+    """
 
     evaluation: EvalSetup
     train: TrainSettings

@@ -131,7 +131,30 @@ def train(cfg: TrainConfig, out: Path) -> dict | None:
     updates stops the run after the update in flight (or inside an evaluation, before its next
     decision) with a checkpoint and raises :class:`~swimrl.evaluation.jobs.Preempted` (exit
     status :data:`~swimrl.evaluation.jobs.PREEMPTED_EXIT`); ``resume=true`` then continues
-    with the evaluation that was stopped (periodic or final)."""
+    with the evaluation that was stopped (periodic or final).
+
+    Parameters
+    ----------
+    cfg
+        The checked training config (:func:`swimrl.config.train_config`).
+    out
+        The run directory: ``policy.pt``, ``metrics.json``, ``curves.csv``, ``tb/``,
+        ``checkpoints/``, ``policies/`` (:class:`~swimrl.policies.files.RunLayout`).
+
+    Returns
+    -------
+    dict or None
+        The final evaluation's metrics (``R_hat_mean``, ``R_hat_sem``, ``per_flow``, ...,
+        ``training``: counters and speeds), as written to ``metrics.json``; None when the run
+        stopped early (``train.stop_after_updates``) or had already finished.
+
+    Raises
+    ------
+    ConfigError
+        A config that differs from the checkpoint's on ``resume=true`` (one line per key).
+    Preempted
+        A preemption signal (exit status 75), after the checkpoint is written.
+    """
     out = Path(out)
     plan = make_plan(cfg)
     cfg.runtime.apply()
