@@ -148,7 +148,8 @@ def test_version_and_repository_url_agree():
     assert pyproject["tool"]["setuptools"]["dynamic"]["version"] == {"attr": "swimrl.__version__"}
     assert citation["version"] == swimrl.__version__
     changelog = (ROOT / "CHANGELOG.md").read_text(encoding="utf-8")
-    assert re.search(r"^## (\S+)$", changelog, re.M).group(1) == swimrl.__version__
+    released = [v for v in re.findall(r"^## (\S+)$", changelog, re.M) if v != "Unreleased"]
+    assert released[0] == swimrl.__version__  # the newest release; "Unreleased" above it
     assert citation["repository-code"] == repo_url == pyproject["project"]["urls"]["Repository"]
 
 
