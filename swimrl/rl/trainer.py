@@ -187,15 +187,19 @@ class PPOTrainer:
         return evaluate(replace(setup, seed=self.plan.eval_seed), self.policy, "policy",
                         preemption=self.preemption if preemption is None else preemption)
 
-    def _periodic_eval(self) -> None:
+    def _periodic_eval(self) -> bool:
         """The periodic held-out evaluation of the current policy, logged at the current frame
-        count; marked pending (:attr:`eval_pending`) until it has finished."""
+        count; marked pending (:attr:`eval_pending`) until it has finished. False when a
+        preemption signal stopped it (it stays pending), True when it finished."""
         self.eval_pending = True
         t0 = time.perf_counter()
         # the policy evaluated, kept so that a policy can be chosen afterwards on flows of a
         # separate validation seed (the periodic evaluation's flows are the final one's)
         self.save_policy(self.run.periodic_policy(self.counters["frames"]))
-        m = self.evaluate()
+        try:
+            m = self.evaluate()
+        except EvaluationInterruptedError:
+            return False
         self.last_eval = m
         step = self.counters["frames"]
         self.logger.log_scalar("eval/R_hat", m["R_hat_mean"], step)
@@ -206,6 +210,7 @@ class PPOTrainer:
         self.logger.log_scalar("eval/time_s", time.perf_counter() - t0, step)
         self.logger.log_scalar("eval/R_hat_vs_episodes", m["R_hat_mean"], round(self.episodes))
         self.eval_pending = False
+        return True
 
     # -- one update ---------------------------------------------------------------------------
     def _loss(self, batch: TensorDict) -> tuple[torch.Tensor, TensorDict]:
@@ -336,12 +341,9 @@ class PPOTrainer:
         if self.logger is None:
             self.logger = rlb.make_logger(self.run)
         first = self.counters["updates"] == 0 and cfg.train.eval_every
-        if first or self.eval_pending:
-            try:
-                self._periodic_eval()
-            except EvaluationInterruptedError:
-                self.save_checkpoint()
-                return self.finished_training
+        if (first or self.eval_pending) and not self._periodic_eval():
+            self.save_checkpoint()  # a signal stopped the evaluation: it stays pending
+            return self.finished_training
         remaining = plan.n_updates - self.counters["updates"]
         if remaining <= 0:
             return True
@@ -396,12 +398,8 @@ class PPOTrainer:
                         self.logger.log_scalar(k, v, step)
                 bar.update(fpb)
                 every = cfg.train.eval_every
-                interrupted = False
-                if every and (u % every == 0 or u == plan.n_updates):
-                    try:
-                        self._periodic_eval()
-                    except EvaluationInterruptedError:  # a signal: checkpoint, evaluation pending
-                        interrupted = True
+                due = bool(every) and (u % every == 0 or u == plan.n_updates)
+                interrupted = due and not self._periodic_eval()  # a signal: checkpoint now
                 post = {"upd": u, "fps": f"{logs['time/frames_per_s']:.0f}"}
                 if self.last_train_r_hat is not None:
                     post["R_train"] = f"{self.last_train_r_hat:.3f}"
