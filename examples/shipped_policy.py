@@ -55,7 +55,7 @@ with initialize_config_module("swimrl.conf", version_base="1.3"):
     cfg = compose(config_name="compare", overrides=overrides)
 
 # %% [markdown]
-# `compare_config` checks every value and returns the typed comparison: an `EvalSetup`
+# `compare_config` checks every value and returns the typed comparison: an `RunSpec`
 # (flow, swimmer and episode parameters, runtime, sizes, seed) and the labelled variants
 # (`naive` expanded over its shape factors, `policy` over the policy specs).
 

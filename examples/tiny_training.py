@@ -21,8 +21,8 @@ import numpy as np
 from hydra import compose, initialize_config_module
 
 from swimrl.config import train_config
-from swimrl.evaluation.records import read_curves
 from swimrl.rl.run import train
+from swimrl.runs.curves import read_curves
 
 SMALL = os.environ.get("SWIMRL_EXAMPLE_SMALL") == "1"
 # figures: $SWIMRL_EXAMPLE_OUT, else examples/out/ (run from the repository root or examples/)

@@ -48,15 +48,15 @@ _EXPORTS: dict[str, str] = {
     "heun_step": "swimrl.physics.swimmer",
     "drag_factor": "swimrl.physics.energy",
     # policies
-    "load_policy": "swimrl.policies.files",
+    "load_policy": "swimrl.runs.policy_files",
     "StrategySpec": "swimrl.policies.baselines",
     "build_strategy": "swimrl.policies.baselines",
     "NaiveShape": "swimrl.policies.baselines",
     "ShortTimeOptimal": "swimrl.policies.baselines",
     "MinimalModel": "swimrl.policies.baselines",
     # evaluation
-    "EvalSetup": "swimrl.evaluation.rollout",
-    "EvalSizes": "swimrl.evaluation.rollout",
+    "RunSpec": "swimrl.runs.spec",
+    "EvalSizes": "swimrl.runs.spec",
     "evaluate": "swimrl.evaluation.rollout",
     "evaluate_shared": "swimrl.evaluation.rollout",
     "CompareConfig": "swimrl.evaluation.compare",
@@ -92,7 +92,7 @@ __all__ = [
     "NaiveShape",
     "ShortTimeOptimal",
     "MinimalModel",
-    "EvalSetup",
+    "RunSpec",
     "EvalSizes",
     "evaluate",
     "evaluate_shared",
@@ -107,7 +107,7 @@ if TYPE_CHECKING:  # for type checkers and the API reference; at run time: __get
     from swimrl.env import EnvParams, SwimmerEnv
     from swimrl.errors import ConfigError
     from swimrl.evaluation.compare import CompareConfig, compare
-    from swimrl.evaluation.rollout import EvalSetup, EvalSizes, evaluate, evaluate_shared
+    from swimrl.evaluation.rollout import evaluate, evaluate_shared
     from swimrl.flows.base import CHANNELS, GriddedFlow
     from swimrl.flows.build import LiveDNSSpec, StochasticSpec, StoredRunSpec, build_flow
     from swimrl.physics.energy import drag_factor
@@ -120,9 +120,10 @@ if TYPE_CHECKING:  # for type checkers and the API reference; at run time: __get
         StrategySpec,
         build_strategy,
     )
-    from swimrl.policies.files import load_policy
     from swimrl.rl.plan import TrainConfig
     from swimrl.rl.run import train
+    from swimrl.runs.policy_files import load_policy
+    from swimrl.runs.spec import EvalSizes, RunSpec
     from swimrl.runtime import Runtime
     from swimrl.task import RewardSpec, TaskSpec
 

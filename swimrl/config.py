@@ -13,7 +13,7 @@ fields, by field name, each number converted to the type its field declares; the
 named otherwise in the yaml (``spinup.time`` -> ``spinup_time``) or built from several keys
 are passed to it. Every key is read as it is: the yaml holds every value that runs (a
 dataclass default is the yaml's value, ``tests/test_config_sources.py``), and the keys an old
-checkpoint lacks are upgraded in :mod:`swimrl.rl.checkpoint`, not here.
+checkpoint lacks are upgraded in :mod:`swimrl.runs.checkpoint`, not here.
 """
 
 from __future__ import annotations
@@ -32,7 +32,7 @@ from swimrl.analysis.gain_scan import GainScanConfig
 from swimrl.env import EnvParams
 from swimrl.errors import ConfigError, number_type, one_of
 from swimrl.evaluation.compare import CompareConfig, strategy_variants
-from swimrl.evaluation.rollout import EvalConfig, EvalSetup, EvalSizes
+from swimrl.evaluation.rollout import EvalConfig
 from swimrl.flows.build import (
     FLOWS,
     FlowSpec,
@@ -47,6 +47,7 @@ from swimrl.flows.labels import flow_tag, kubo_label
 from swimrl.policies.baselines import StrategySpec
 from swimrl.policies.networks import ModelSpec
 from swimrl.rl.plan import LossSettings, OptimSettings, TrainConfig, TrainSettings
+from swimrl.runs.spec import EvalSizes, RunSpec
 from swimrl.runtime import Runtime
 from swimrl.task import RewardSpec, TaskSpec
 
@@ -152,11 +153,11 @@ def eval_sizes(node: DictConfig) -> EvalSizes:
     return from_node(EvalSizes, {"eval.": node})
 
 
-def eval_setup(cfg: DictConfig) -> EvalSetup:
+def eval_setup(cfg: DictConfig) -> RunSpec:
     """Physics, flow, runtime, evaluation sizes and seed of any evaluating command."""
     params = env_params(cfg)
     rt = runtime(cfg)
-    return from_node(EvalSetup, {"": cfg}, flow=flow_spec(cfg.flow, rt), params=params,
+    return from_node(RunSpec, {"": cfg}, flow=flow_spec(cfg.flow, rt), params=params,
                      runtime=rt, sizes=eval_sizes(cfg.eval), record=record_of(cfg))
 
 
@@ -243,7 +244,7 @@ def train_config(cfg: DictConfig) -> TrainConfig:
     reward_scale = None if t.reward_scale in (None, "auto") else _float(t.reward_scale)
     return from_node(
         TrainConfig, {"": cfg},
-        evaluation=eval_setup(cfg),
+        spec=eval_setup(cfg),
         train=from_node(TrainSettings, {"train.": t}, reward_scale=reward_scale),
         loss=from_node(LossSettings, {"loss.": cfg.loss}),
         optim=from_node(OptimSettings, {"optim.": cfg.optim}),

@@ -193,7 +193,7 @@ def test_sweep_relaunch_with_resume_is_a_no_op(tmp_path):
 @pytest.mark.parametrize("damage", ["truncate", "text"])
 def test_corrupt_policy_file_is_one_line_with_its_path(tmp_path, damage):
     from swimrl.errors import BadFileError
-    from swimrl.policies.files import load_file, resolve_policy_file
+    from swimrl.runs.policy_files import load_file, resolve_policy_file
 
     src = resolve_policy_file("pretrained/ku10").read_bytes()
     bad = tmp_path / "policy.pt"

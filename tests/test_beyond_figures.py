@@ -14,7 +14,7 @@ import pytest
 from swimrl.analysis.figures import beyond
 from swimrl.config import compare_config, figures_config
 from swimrl.evaluation.compare import compare
-from swimrl.policies.files import PRETRAINED_ROOT
+from swimrl.runs.policy_files import PRETRAINED_ROOT
 
 from .conftest import SMALL
 

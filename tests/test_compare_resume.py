@@ -14,7 +14,8 @@ from swimrl.env import SwimmerEnv
 from swimrl.errors import BadFileError, ConfigError
 from swimrl.evaluation.compare import compare
 from swimrl.policies import pretrained
-from swimrl.policies.files import RunLayout, sha256_file
+from swimrl.runs.layout import RunLayout
+from swimrl.runs.policy_files import sha256_file
 
 from .conftest import SMALL
 from .test_bad_input import COMPARE, _run_cases

@@ -26,7 +26,7 @@ from swimrl.config import eval_config, strategy_spec
 from swimrl.env import EnvParams, SwimmerEnv
 from swimrl.errors import ConfigError
 from swimrl.evaluation.compare import CompareConfig, strategy_variants
-from swimrl.evaluation.rollout import EvalConfig, EvalSetup, EvalSizes
+from swimrl.evaluation.rollout import EvalConfig
 from swimrl.flows.build import LiveDNSSpec, StochasticSpec, StoredRunSpec
 from swimrl.flows.dns.params import DNSParams
 from swimrl.flows.dns.run import DNSRun
@@ -34,6 +34,7 @@ from swimrl.flows.stochastic import StochasticFlow
 from swimrl.policies.baselines import StrategySpec
 from swimrl.policies.networks import ModelSpec, make_mlp, tanh_normal_actor, value_critic
 from swimrl.rl.plan import LossSettings, OptimSettings, TrainConfig, TrainSettings
+from swimrl.runs.spec import EvalSizes, RunSpec
 from swimrl.runtime import Runtime
 from swimrl.task import RewardSpec, TaskSpec
 
@@ -42,7 +43,7 @@ EVALUATING = ("evaluate", "train", "compare", "naive_scan", "fit_minimal", "gain
 #: ... and the figures, which share the flow, swimmer, episode and runtime groups.
 WITH_FLOW = (*EVALUATING, "figures")
 #: The typed configs without a default: the yaml holds every value.
-NO_DEFAULTS = (EvalSetup, EvalConfig, TrainSettings, LossSettings, OptimSettings, ModelSpec,
+NO_DEFAULTS = (RunSpec, EvalConfig, TrainSettings, LossSettings, OptimSettings, ModelSpec,
                TrainConfig, FitConfig, GainScanConfig, FiguresConfig, DNSFiguresConfig)
 _ABSENT = object()
 

@@ -16,7 +16,7 @@ import pytest
 from swimrl.analysis.figures import mechanism, records, robustness
 from swimrl.config import figures_config
 from swimrl.errors import BadFileError, ConfigError
-from swimrl.policies.files import PRETRAINED_ROOT
+from swimrl.runs.policy_files import PRETRAINED_ROOT
 
 TINY = ["progress=false", "threads=1", "episode.duration=1.0", "flow.n_grid=64",
         "flow.spacing=0.1", "figures.robust_flows=2", "figures.robust_swimmers=3",

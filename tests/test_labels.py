@@ -1,5 +1,5 @@
 """The one Ku label format (swimrl.flows.labels), the one strategy label (StrategyLabel) and the
-one atomic write (swimrl.atomic)."""
+one atomic write (swimrl.runs.atomic)."""
 
 from __future__ import annotations
 
@@ -7,7 +7,6 @@ import os
 
 import pytest
 
-from swimrl.atomic import atomic_write, atomic_write_text, temp_path
 from swimrl.flows.labels import (
     flow_display,
     flow_tag,
@@ -19,6 +18,7 @@ from swimrl.flows.labels import (
     parse_kubo,
 )
 from swimrl.policies.baselines import StrategyLabel
+from swimrl.runs.atomic import atomic_write, atomic_write_text, temp_path
 
 
 @pytest.mark.parametrize(("kubo", "label", "name", "shown"), [

@@ -11,11 +11,12 @@ import torch
 
 from swimrl.config import train_config
 from swimrl.errors import BadFileError, NonFiniteError
-from swimrl.evaluation.records import write_json
-from swimrl.policies.files import RunLayout, load_file
-from swimrl.rl.checkpoint import load_checkpoint
 from swimrl.rl.run import train
 from swimrl.rl.trainer import PPOTrainer
+from swimrl.runs.checkpoint import load_checkpoint
+from swimrl.runs.layout import RunLayout
+from swimrl.runs.policy_files import load_file
+from swimrl.runs.records import write_json
 
 from .test_train import TINY
 

@@ -10,14 +10,14 @@ import torch
 from tensordict import TensorDict
 from torchrl.envs.utils import ExplorationType, set_exploration_type
 
-import swimrl.policies.files as pio
+import swimrl.runs.policy_files as pio
 from swimrl.config import compare_config, env_params, eval_config, gain_scan_config, train_config
 from swimrl.env import EnvParams
 from swimrl.errors import ConfigError
 from swimrl.evaluation.compare import compare
 from swimrl.evaluation.rollout import actor_for, evaluate
-from swimrl.policies.files import policy_meta, save_policy
 from swimrl.policies.networks import action_spec, mean_network, tanh_normal_actor
+from swimrl.runs.policy_files import policy_meta, save_policy
 
 from .conftest import SMALL
 

@@ -19,7 +19,8 @@ import pytest
 
 from swimrl.config import compare_config, train_config
 from swimrl.evaluation.compare import compare
-from swimrl.evaluation.jobs import (
+from swimrl.rl.run import train
+from swimrl.runs.jobs import (
     PREEMPTED_EXIT,
     Preempted,
     RunDirInUseError,
@@ -27,8 +28,8 @@ from swimrl.evaluation.jobs import (
     refuse_if_locked,
     run_lock,
 )
-from swimrl.policies.files import RunLayout, load_file
-from swimrl.rl.run import train
+from swimrl.runs.layout import RunLayout
+from swimrl.runs.policy_files import load_file
 
 from .conftest import SMALL
 from .test_bad_input import COMPARE, EVAL, TRAIN, _run_cases

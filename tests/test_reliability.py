@@ -10,7 +10,7 @@ import pytest
 import torch
 
 from swimrl.errors import BadFileError
-from swimrl.policies.files import load_file, resolve_policy_file
+from swimrl.runs.policy_files import load_file, resolve_policy_file
 
 from .conftest import SMALL
 from .test_bad_input import COMPARE, EVAL, TRAIN, _run_cases

@@ -270,7 +270,7 @@ def test_a_replay_checkpoint_from_before_the_sharing_keys_resumes_as_before(comp
     the defaults: its config then equals today's."""
     from omegaconf import OmegaConf
 
-    from swimrl.rl.checkpoint import upgrade_config
+    from swimrl.runs.checkpoint import upgrade_config
 
     now = OmegaConf.to_container(compose_cfg(["flow=dns_replay"], name="train"))
     old = {**now, "flow": {k: v for k, v in now["flow"].items()

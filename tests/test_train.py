@@ -16,11 +16,12 @@ from tensorboard.backend.event_processing.event_accumulator import EventAccumula
 
 from swimrl.config import train_config
 from swimrl.errors import ConfigError
-from swimrl.policies.files import RunLayout, load_file
 from swimrl.rl.builders import auto_reward_scale, make_env
 from swimrl.rl.plan import EVAL_SEED_OFFSET, make_plan
 from swimrl.rl.run import train as _train
 from swimrl.rl.trainer import PPOTrainer
+from swimrl.runs.layout import RunLayout
+from swimrl.runs.policy_files import load_file
 
 from .conftest import SMALL
 
@@ -49,7 +50,7 @@ def train(cfg, out):
 
 def _env(c, plan):
     """The training env of the typed config ``c``."""
-    return make_env(c.evaluation.flow, c.params, c.runtime, c.train, c.loss, plan.train_seed)
+    return make_env(c.spec.flow, c.params, c.runtime, c.train, c.loss, plan.train_seed)
 
 
 def validate_train_cfg(cfg):
@@ -267,7 +268,7 @@ def test_kill_and_resume_round_trip(train_cfg, tmp_path, monkeypatch):
 def test_stop_after_updates_then_resume(train_cfg, tmp_path):
     import shutil
 
-    from swimrl.rl.curves import read_curves_csv
+    from swimrl.runs.curves import read_curves_csv
 
     assert train(train_cfg("train.stop_after_updates=3", "train.eval_every=0"), tmp_path) is None
     assert load_file(RunLayout(tmp_path).checkpoint)["counters"]["updates"] == 3
@@ -432,7 +433,7 @@ def test_training_in_a_stored_dns_run(compose_cfg, tmp_path):
                               "flow.flows_per_start=2", f"+eval_flow.path=[{stores[1]}]"],
                       name="train")
     tc = train_config(cfg)
-    assert tc.evaluation.flow.paths == (stores[0],) and tc.held_out.flow.paths == (stores[1],)
+    assert tc.spec.flow.paths == (stores[0],) and tc.held_out.flow.paths == (stores[1],)
     metrics = train(cfg, tmp_path / "run")
     assert math.isfinite(metrics["R_hat_mean"]) and metrics["training"]["frames"] == 320
     assert metrics["flow_stats"]["u_rms"] > 0 and s.n_times == 40

@@ -39,7 +39,7 @@ def test_curves_over_a_base(tmp_path):
 
     from torch.utils.tensorboard import SummaryWriter
 
-    from swimrl.rl.curves import read_curves_csv, write_curves
+    from swimrl.runs.curves import read_curves_csv, write_curves
 
     out = tmp_path / "curves.csv"
     out.write_text("frames,eval/R_hat,train/R_hat\n100,0.25,\n200,,0.3\n300,,0.4\n")

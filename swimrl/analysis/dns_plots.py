@@ -36,11 +36,11 @@ from pathlib import Path
 import numpy as np
 import torch
 
-from swimrl.atomic import atomic_write_text
 from swimrl.flows.dns import diagnostics as dg
 from swimrl.flows.dns.grid import SpectralGrid
 from swimrl.flows.dns.params import DNSParams
 from swimrl.flows.sources import DNSStore
+from swimrl.runs.atomic import atomic_write_text
 
 from .plots import pyplot
 

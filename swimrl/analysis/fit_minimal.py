@@ -32,7 +32,7 @@ from swimrl.errors import ConfigError, as_int, keep_number_types
 from swimrl.evaluation.rollout import EvalConfig, actor_for, chunk_seed, run_episodes
 from swimrl.flows.labels import ku_number
 from swimrl.policies.baselines import build_strategy, minimal_model
-from swimrl.policies.files import RunLayout
+from swimrl.runs.layout import RunLayout
 
 
 @dataclass(frozen=True)

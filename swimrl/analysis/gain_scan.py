@@ -23,9 +23,10 @@ from dataclasses import dataclass
 import torch
 
 from swimrl.errors import require
-from swimrl.evaluation.records import markdown_table
-from swimrl.evaluation.rollout import EvalSetup, evaluate
-from swimrl.policies.files import load_policy
+from swimrl.evaluation.rollout import evaluate
+from swimrl.runs.policy_files import load_policy
+from swimrl.runs.records import markdown_table
+from swimrl.runs.spec import RunSpec
 
 
 @dataclass(frozen=True)
@@ -33,7 +34,7 @@ class GainScanConfig:
     """The policy ``policy`` evaluated on ``setup`` with its mean scaled by each of ``gains``;
     ``overwrite``: replace an earlier scan's record."""
 
-    setup: EvalSetup
+    setup: RunSpec
     policy: str
     gains: tuple[float, ...]
     overwrite: bool

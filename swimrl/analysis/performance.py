@@ -21,11 +21,11 @@ from pathlib import Path
 
 import numpy as np
 
-from swimrl.evaluation.records import markdown_table
 from swimrl.evaluation.statistics import mean_std_sem, paired_ratio
 from swimrl.flows.labels import ku_number
 from swimrl.policies.baselines import StrategyLabel
-from swimrl.policies.files import RunLayout
+from swimrl.runs.layout import RunLayout
+from swimrl.runs.records import markdown_table
 
 #: The baseline rows every comparison must hold: STO and the paper's naive (Lambda = 0.98).
 STO, NAIVE = StrategyLabel("sto").label, StrategyLabel.naive(0.98).label

@@ -21,12 +21,13 @@ from pathlib import Path
 
 import numpy as np
 
-from swimrl.evaluation.records import markdown_table, read_curves
 from swimrl.evaluation.statistics import mean_std_sem
 from swimrl.flows.labels import ku_display
 from swimrl.physics.signals import SIGNAL_NAMES
 from swimrl.policies.baselines import StrategyLabel
-from swimrl.policies.files import RunLayout
+from swimrl.runs.curves import read_curves
+from swimrl.runs.layout import RunLayout
+from swimrl.runs.records import markdown_table
 
 from .training_curves import PAPER_EPISODE_FRAMES
 

@@ -18,9 +18,9 @@ import json
 from collections.abc import Iterable
 from pathlib import Path
 
-from swimrl.evaluation.records import csv_table, flatten, markdown_table
 from swimrl.evaluation.statistics import mean_std_sem
-from swimrl.policies.files import RunLayout
+from swimrl.runs.layout import RunLayout
+from swimrl.runs.records import csv_table, flatten, markdown_table
 
 #: Keys never shown as swept: runtime settings, progress flags, bookkeeping.
 IGNORED_KEYS = {

@@ -19,7 +19,7 @@ from pathlib import Path
 
 import numpy as np
 
-from swimrl.evaluation.records import read_curves
+from swimrl.runs.curves import read_curves
 
 from .plots import pyplot
 

@@ -32,7 +32,7 @@ from hydra.experimental.callback import Callback
 from omegaconf import DictConfig, OmegaConf
 
 from swimrl.errors import BadFileError, ConfigError, IntegrityError, NonFiniteError
-from swimrl.policies.files import RunLayout
+from swimrl.runs.layout import RunLayout
 
 #: The configs shipped with the package (the repository's top-level ``conf/``).
 CONFIG_PATH = "pkg://swimrl.conf"
@@ -89,7 +89,7 @@ def one_line_errors(task: Callable) -> Callable:
 
 def provenance_subdir(output_dir: str, overwrite) -> str | None:
     """``hydra.output_subdir``: ``.hydra``, or None (Hydra then writes no config files) when
-    ``output_dir`` holds a result (:attr:`~swimrl.policies.files.RunLayout.results`) and
+    ``output_dir`` holds a result (:attr:`~swimrl.runs.layout.RunLayout.results`) and
     ``overwrite`` is not true."""
     finished = any(path.exists() for path in RunLayout(output_dir).results)
     return None if finished and overwrite is not True else ".hydra"

@@ -14,7 +14,7 @@ An interrupted comparison continues with the same command (the same run director
 finished comparison is left as it is (so a relaunched multirun only completes what is
 missing). On ``SIGTERM`` or ``SIGUSR1`` (a scheduler's preemption or time-limit warning) the
 comparison stops after the chunk in flight, with the partial record written, and exits with
-status 75 (:data:`swimrl.evaluation.jobs.PREEMPTED_EXIT`); one process at a time works in a
+status 75 (:data:`swimrl.runs.jobs.PREEMPTED_EXIT`); one process at a time works in a
 run directory (its ``.lock``).
 """
 
@@ -31,10 +31,10 @@ from swimrl.cli import command, run_dir
 from swimrl.config import compare_config
 from swimrl.errors import ConfigError
 from swimrl.evaluation.compare import CompareConfig, compare
-from swimrl.evaluation.jobs import preemption_signals, refuse_if_locked, run_lock
-from swimrl.evaluation.records import refuse_overwrite, write_comparison
 from swimrl.evaluation.rollout import check_eval_memory
-from swimrl.policies.files import RunLayout
+from swimrl.runs.jobs import preemption_signals, refuse_if_locked, run_lock
+from swimrl.runs.layout import RunLayout
+from swimrl.runs.records import refuse_overwrite, write_comparison
 
 log = logging.getLogger(__name__)
 

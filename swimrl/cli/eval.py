@@ -6,7 +6,7 @@ r"""``swimrl-eval``: a strategy on fresh flow realisations -> ``metrics.json``.
                                               #   swimmers per flow
 
 On ``SIGTERM`` or ``SIGUSR1`` it stops before the next decision, writes nothing and exits with
-status 75 (:data:`swimrl.evaluation.jobs.PREEMPTED_EXIT`): the same command runs it again.
+status 75 (:data:`swimrl.runs.jobs.PREEMPTED_EXIT`): the same command runs it again.
 """
 
 from __future__ import annotations
@@ -18,16 +18,16 @@ from omegaconf import DictConfig
 
 from swimrl.cli import command, run_dir
 from swimrl.config import eval_config
-from swimrl.evaluation.jobs import (
+from swimrl.evaluation.rollout import Actor, EvalConfig, actor_for, check_eval_memory, evaluate
+from swimrl.evaluation.trajectories import TrajectoryRecorder, save_trajectories
+from swimrl.runs.jobs import (
     EvaluationInterruptedError,
     preemption_signals,
     refuse_if_locked,
     run_lock,
 )
-from swimrl.evaluation.records import refuse_overwrite, summary_line, write_json
-from swimrl.evaluation.rollout import Actor, EvalConfig, actor_for, check_eval_memory, evaluate
-from swimrl.evaluation.trajectories import TrajectoryRecorder, save_trajectories
-from swimrl.policies.files import RunLayout
+from swimrl.runs.layout import RunLayout
+from swimrl.runs.records import refuse_overwrite, summary_line, write_json
 
 log = logging.getLogger(__name__)
 

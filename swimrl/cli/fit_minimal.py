@@ -15,8 +15,8 @@ from omegaconf import DictConfig
 from swimrl.analysis.fit_minimal import FitConfig, run_fit
 from swimrl.cli import command, run_dir
 from swimrl.config import fit_config
-from swimrl.evaluation.records import refuse_overwrite, write_json
-from swimrl.policies.files import RunLayout
+from swimrl.runs.layout import RunLayout
+from swimrl.runs.records import refuse_overwrite, write_json
 
 
 def check(cfg: DictConfig, out: Path | None) -> FitConfig:

@@ -15,11 +15,11 @@ from pathlib import Path
 from omegaconf import DictConfig
 
 from swimrl.analysis.gain_scan import GainScanConfig, gain_scan, markdown
-from swimrl.atomic import atomic_write_text
 from swimrl.cli import command, run_dir
 from swimrl.config import gain_scan_config
-from swimrl.evaluation.records import refuse_overwrite, write_json
-from swimrl.policies.files import RunLayout
+from swimrl.runs.atomic import atomic_write_text
+from swimrl.runs.layout import RunLayout
+from swimrl.runs.records import refuse_overwrite, write_json
 
 log = logging.getLogger(__name__)
 

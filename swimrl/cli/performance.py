@@ -11,7 +11,7 @@ from pathlib import Path
 
 from swimrl.analysis.performance import load, markdown, summarise
 from swimrl.analysis.plots import plot_performance
-from swimrl.atomic import atomic_write_text
+from swimrl.runs.atomic import atomic_write_text
 
 
 def main(argv: list[str] | None = None) -> int:

@@ -13,7 +13,7 @@ import sys
 from pathlib import Path
 
 from swimrl.analysis.table import build_rows, collect, markdown, swept_keys, to_csv
-from swimrl.atomic import atomic_write_text
+from swimrl.runs.atomic import atomic_write_text
 
 
 def main(argv: list[str] | None = None) -> int:

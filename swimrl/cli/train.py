@@ -10,7 +10,7 @@ Writes into the run directory ``checkpoints/last.pt``, ``policy.pt``, ``tb/`` (T
 and, at the end, ``metrics.json`` (held-out deterministic evaluation, as ``swimrl-eval``).
 On ``SIGTERM`` or ``SIGUSR1`` (a scheduler's preemption or time-limit warning) it finishes
 the update in flight, writes a checkpoint and exits with status 75
-(:data:`swimrl.evaluation.jobs.PREEMPTED_EXIT`): continue with ``resume=true``. One process
+(:data:`swimrl.runs.jobs.PREEMPTED_EXIT`): continue with ``resume=true``. One process
 at a time trains in a run directory (its ``.lock``); a second one is refused. See
 ``docs/training.md``.
 """

@@ -1,3 +1,3 @@
 """Evaluation: the rollout loop (:mod:`.rollout`, single and shared flows), statistics over
-flows (:mod:`.statistics`), comparisons (:mod:`.compare`) and result records and tables
-(:mod:`.records`)."""
+flows (:mod:`.statistics`), trajectories (:mod:`.trajectories`) and comparisons
+(:mod:`.compare`). Records and tables are written by :mod:`swimrl.runs.records`."""

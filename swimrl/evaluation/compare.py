@@ -30,11 +30,12 @@ import torch
 
 from swimrl.errors import BadFileError, ConfigError, as_bool
 from swimrl.policies.baselines import STRATEGIES, StrategyLabel, StrategySpec
-from swimrl.policies.files import resolve_policy_file, sha256_file
+from swimrl.runs.jobs import EvaluationInterruptedError, Preemption
+from swimrl.runs.policy_files import resolve_policy_file, sha256_file
+from swimrl.runs.records import summary_line, write_json
+from swimrl.runs.spec import RunSpec
 
-from .jobs import EvaluationInterruptedError, Preemption
-from .records import summary_line, write_json
-from .rollout import Actor, EvalSetup, actor_for, check_chunks, evaluate_shared, flow_chunks
+from .rollout import Actor, actor_for, check_chunks, evaluate_shared, flow_chunks
 from .statistics import paired_difference, paired_ratio
 
 #: Outcome keys a comparison row carries over from its strategy's metrics (where present).
@@ -75,7 +76,7 @@ class CompareConfig:
         Replace a finished comparison; continue from ``comparison.partial.json``.
     """
 
-    setup: EvalSetup
+    setup: RunSpec
     variants: tuple[Variant, ...]
     shared_flows: bool = False
     overwrite: bool = False
@@ -163,7 +164,7 @@ def identity(cfg: CompareConfig, actors: Sequence[Actor]) -> dict:
 
 def load_partial(path: Path, expected: dict) -> dict:
     """The chunk results of ``path`` (a run directory's ``comparison.partial.json``,
-    :attr:`~swimrl.policies.files.RunLayout.comparison_partial`), refused (ConfigError) unless
+    :attr:`~swimrl.runs.layout.RunLayout.comparison_partial`), refused (ConfigError) unless
     they were computed for ``expected`` (:func:`identity`)."""
     try:
         saved = json.loads(Path(path).read_text())

@@ -18,7 +18,7 @@ from __future__ import annotations
 
 import time
 from collections.abc import Callable, Sequence
-from dataclasses import dataclass, replace
+from dataclasses import dataclass
 
 import numpy as np
 import torch
@@ -28,14 +28,15 @@ from torch import nn
 from tqdm.auto import tqdm
 
 from swimrl.env import EnvParams, SwimmerEnv
-from swimrl.errors import ConfigError, as_bool, as_int, keep_number_types, require
-from swimrl.flows.build import FLOW_WORK_BYTES, FlowSpec, StoredRunSpec, flow_table_bytes
+from swimrl.errors import ConfigError, as_bool
+from swimrl.flows.build import FLOW_WORK_BYTES, StoredRunSpec, flow_table_bytes
 from swimrl.flows.dns.store import store_record
 from swimrl.policies.baselines import StrategySpec, build_strategy
-from swimrl.policies.files import load_policy
-from swimrl.runtime import Runtime, check_memory
+from swimrl.runs.jobs import EvaluationInterruptedError, Preemption
+from swimrl.runs.policy_files import load_policy
+from swimrl.runs.spec import EvalSizes, RunSpec
+from swimrl.runtime import check_memory
 
-from .jobs import EvaluationInterruptedError, Preemption
 from .statistics import chunk_outcomes, flow_statistics, mean_flow_stats, outcome_statistics
 from .trajectories import TrajectoryRecorder
 
@@ -45,83 +46,10 @@ Actor = StrategySpec | TensorDictModule
 
 
 @dataclass(frozen=True)
-class EvalSizes:
-    """``eval.*``: flows, swimmers per flow, flows simulated at once, progress bar, and the
-    number of swimmers per flow whose every decision is recorded (``record``, 0: none; see
-    :mod:`swimrl.evaluation.trajectories`).
-
-    Parameters
-    ----------
-    n_flows
-        Flow realisations (paper: 100).
-    n_swimmers
-        Swimmers per flow (paper: 1000), from uniformly random starts.
-    flows_per_batch
-        Realisations simulated at once (one chunk; memory ~16 MB each at the paper's grid).
-    progress
-        A tqdm bar over the decisions.
-    record
-        Swimmers per flow whose every decision goes to ``trajectories.npz``.
-    """
-
-    n_flows: int
-    n_swimmers: int
-    flows_per_batch: int
-    progress: bool
-    record: int = 0  # conf/evaluate.yaml's eval.record (tests/test_config_sources.py)
-
-    def __post_init__(self) -> None:
-        as_bool("eval.progress", self.progress)
-        for key in ("n_flows", "n_swimmers", "flows_per_batch"):
-            as_int(f"eval.{key}", getattr(self, key))
-        require(as_int("eval.record", self.record, low=0) <= self.n_swimmers, "eval.record",
-                self.record, f"an integer in [0, eval.n_swimmers={self.n_swimmers}]")
-        keep_number_types(self)
-
-
-@dataclass(frozen=True)
-class EvalSetup:
-    """Where and how strategies are evaluated; ``record`` (the resolved config) is written
-    into the results.
-
-    Parameters
-    ----------
-    flow
-        The flow (:class:`~swimrl.flows.build.StochasticSpec`, a stored or live DNS spec).
-    params
-        Swimmer, episode, signals, task and reward (:class:`~swimrl.env.EnvParams`).
-    runtime
-        Device, dtype, threads, kernel (:class:`~swimrl.runtime.Runtime`).
-    sizes
-        Flows, swimmers, chunking (:class:`EvalSizes`).
-    seed
-        Chunk ``c`` of the flows is drawn from ``SeedSequence([seed, c])``: the same seed
-        gives every strategy the same flows and starts.
-    record
-        The resolved config, copied into every result.
-    """
-
-    flow: FlowSpec
-    params: EnvParams
-    runtime: Runtime
-    sizes: EvalSizes
-    seed: int
-    record: dict
-
-    def __post_init__(self) -> None:
-        object.__setattr__(self, "seed", as_int("seed", self.seed, low=0))
-
-    def resized(self, n_flows: int, n_swimmers: int) -> EvalSetup:
-        """The same setup with ``n_flows x n_swimmers`` and no progress bar."""
-        sizes = EvalSizes(n_flows, n_swimmers, min(self.sizes.flows_per_batch, n_flows), False, 0)
-        return replace(self, sizes=sizes)
-
-
-@dataclass(frozen=True)
 class EvalConfig:
     """``swimrl-eval``: one strategy (a baseline, or ``policy`` with a policy spec) on ``setup``."""
 
-    setup: EvalSetup
+    setup: RunSpec
     strategy: StrategySpec
     policy: str | None
     overwrite: bool
@@ -142,7 +70,7 @@ class EvalConfig:
 SWIMMER_BYTES = 512
 
 
-def check_eval_memory(setup: EvalSetup, n_strategies: int = 1) -> None:
+def check_eval_memory(setup: RunSpec, n_strategies: int = 1) -> None:
     """Refuse (one line naming ``eval.flows_per_batch``) a chunk of ``flows_per_batch`` flows,
     ``n_strategies x n_swimmers`` swimmers each, whose flow tables, swimmers and work memory
     (:func:`~swimrl.flows.build.flow_table_bytes`, :data:`SWIMMER_BYTES`,
@@ -235,7 +163,7 @@ def check_chunks(done: Sequence[dict], chunks: Sequence[int], k: int) -> None:
                              "with flow_stats, sim_s and wall_s")
 
 
-def evaluate_shared(setup: EvalSetup, actors: Sequence[Actor], desc: str = "eval",
+def evaluate_shared(setup: RunSpec, actors: Sequence[Actor], desc: str = "eval",
                     recorder: TrajectoryRecorder | None = None,
                     done: Sequence[dict] = (),
                     on_chunk: Callable[[dict], None] | None = None,
@@ -258,10 +186,10 @@ def evaluate_shared(setup: EvalSetup, actors: Sequence[Actor], desc: str = "eval
     Parameters
     ----------
     setup
-        Flow, physics, runtime, sizes and seed (:class:`EvalSetup`).
+        Flow, physics, runtime, sizes and seed (:class:`RunSpec`).
     actors
         Baselines (:class:`~swimrl.policies.baselines.StrategySpec`) or actor modules (e.g.
-        :func:`~swimrl.policies.files.load_policy`), one block of swimmers each.
+        :func:`~swimrl.runs.policy_files.load_policy`), one block of swimmers each.
     desc, recorder, done, on_chunk, preemption
         Progress label; trajectory recorder; chunk results to reuse; callback after each
         chunk; the signal flag read between decisions.
@@ -335,7 +263,7 @@ def evaluate_shared(setup: EvalSetup, actors: Sequence[Actor], desc: str = "eval
             for j in range(k)]
 
 
-def evaluate(setup: EvalSetup, actor: Actor, strategy: str,
+def evaluate(setup: RunSpec, actor: Actor, strategy: str,
              recorder: TrajectoryRecorder | None = None,
              preemption: Preemption | None = None) -> dict:
     """Metrics of one strategy (named ``strategy`` in the record) on ``setup``; stopped
@@ -344,9 +272,9 @@ def evaluate(setup: EvalSetup, actor: Actor, strategy: str,
     Parameters
     ----------
     setup
-        Flow, physics, runtime, sizes and seed (:class:`EvalSetup`).
+        Flow, physics, runtime, sizes and seed (:class:`RunSpec`).
     actor
-        A baseline spec or an actor module (:func:`~swimrl.policies.files.load_policy`).
+        A baseline spec or an actor module (:func:`~swimrl.runs.policy_files.load_policy`).
     strategy
         Its name in the record.
     recorder, preemption

@@ -33,8 +33,7 @@ import torch
 from tensordict import TensorDictBase
 
 from swimrl.physics.signals import SIGNAL_NAMES
-
-from .records import write_npz
+from swimrl.runs.records import write_npz
 
 
 class TrajectoryRecorder:

@@ -157,7 +157,7 @@ def build_strategy(spec: StrategySpec, action_spec: Bounded) -> TensorDictModule
     ----------
     spec
         ``naive``, ``sto`` or ``minimal`` (a policy is loaded with
-        :func:`~swimrl.policies.files.load_policy`).
+        :func:`~swimrl.runs.policy_files.load_policy`).
     action_spec
         The environment's ``action_spec_unbatched``.
 

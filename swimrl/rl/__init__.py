@@ -2,7 +2,7 @@
 
 Modules: :mod:`~swimrl.rl.plan` (typed settings, sizes, schedule, seeds),
 :mod:`~swimrl.rl.builders` (env, actor, critic, collector, loss, optimisers, schedulers,
-logger), :mod:`~swimrl.rl.trainer` (the update loop), :mod:`~swimrl.rl.checkpoint` (atomic
-checkpoints), :mod:`~swimrl.rl.run` (run directory, resume, final evaluation). The networks
-and the policy files are in :mod:`swimrl.policies`.
+logger), :mod:`~swimrl.rl.trainer` (the update loop), :mod:`~swimrl.rl.run` (resume, final
+evaluation). The networks are in :mod:`swimrl.policies`; the run's spec, its directory,
+policy files, checkpoints and curves in :mod:`swimrl.runs`.
 """

@@ -27,9 +27,9 @@ from torchrl.record.loggers.tensorboard import TensorboardLogger
 
 from swimrl.env import EnvParams, SwimmerEnv
 from swimrl.flows.build import FlowSpec
-from swimrl.policies.files import RunLayout
 from swimrl.policies.networks import ModelSpec, tanh_normal_actor, value_critic
 from swimrl.rl.plan import LossSettings, OptimSettings, TrainSettings
+from swimrl.runs.layout import RunLayout
 from swimrl.runtime import Runtime
 
 

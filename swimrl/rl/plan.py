@@ -29,9 +29,10 @@ import numpy as np
 
 from swimrl.env import EnvParams
 from swimrl.errors import as_bool, as_float, as_int, keep_number_types, one_of, require
-from swimrl.evaluation.rollout import SWIMMER_BYTES, EvalSetup
+from swimrl.evaluation.rollout import SWIMMER_BYTES
 from swimrl.flows.build import FLOW_WORK_BYTES, FlowSpec, flow_table_bytes
 from swimrl.policies.networks import ModelSpec
+from swimrl.runs.spec import RunSpec
 from swimrl.runtime import Runtime, check_memory
 
 #: Offset added to ``seed`` for the held-out evaluation flows.
@@ -166,9 +167,9 @@ class TrainConfig:
 
     Parameters
     ----------
-    evaluation
+    spec
         The flow, swimmer and episode parameters, runtime, final-evaluation sizes and seed
-        (:class:`~swimrl.evaluation.rollout.EvalSetup`).
+        (:class:`~swimrl.runs.spec.RunSpec`).
     train, loss, optim, model
         ``train.*`` (sizes, budget, cadence), ``loss.*`` (``ClipPPOLoss`` and ``GAE``),
         ``optim.*`` (Adam, annealing, clipping), ``model.*`` (networks).
@@ -179,7 +180,7 @@ class TrainConfig:
         runs); None: the training flow with held-out seeds.
     """
 
-    evaluation: EvalSetup
+    spec: RunSpec
     train: TrainSettings
     loss: LossSettings
     optim: OptimSettings
@@ -189,21 +190,21 @@ class TrainConfig:
     eval_flow: FlowSpec | None  # None: the training flow
 
     @property
-    def held_out(self) -> EvalSetup:
+    def held_out(self) -> RunSpec:
         """The evaluations' setup: :attr:`evaluation` with the flow of ``eval_flow`` (held-out
         runs, ``eval_flow.*``) where one is given."""
         if self.eval_flow is None:
-            return self.evaluation
-        return replace(self.evaluation, flow=self.eval_flow)
+            return self.spec
+        return replace(self.spec, flow=self.eval_flow)
 
     def __post_init__(self) -> None:
         as_bool("resume", self.resume)
         as_bool("overwrite", self.overwrite)
-        device = self.evaluation.runtime.device
+        device = self.spec.runtime.device
         require(not self.train.cudagraphs or device.type == "cuda",
                 "train.cudagraphs", self.train.cudagraphs,
                 f"false on device={device} (CUDA graphs need device=cuda)")
-        lam_max = self.evaluation.params.shape_factor_max
+        lam_max = self.spec.params.shape_factor_max
         require(not self.train.compare_baselines or lam_max >= 0.98,
                 "train.compare_baselines", self.train.compare_baselines,
                 f"false with swimmer.shape_factor_max={lam_max} (its naive baseline is "
@@ -212,20 +213,20 @@ class TrainConfig:
     @property
     def seed(self) -> int:
         """The run's seed (network init, action sampling, training and evaluation flows)."""
-        return self.evaluation.seed
+        return self.spec.seed
 
     @property
     def params(self) -> EnvParams:
-        return self.evaluation.params
+        return self.spec.params
 
     @property
     def runtime(self) -> Runtime:
-        return self.evaluation.runtime
+        return self.spec.runtime
 
     @property
     def record(self) -> dict:
         """The resolved config, stored in checkpoints, policies and ``metrics.json``."""
-        return self.evaluation.record
+        return self.spec.record
 
 
 @dataclass(frozen=True)
@@ -284,7 +285,7 @@ def check_train_memory(cfg: TrainConfig) -> None:
     eval_flows = min(held.sizes.flows_per_batch, held.sizes.n_flows)
     t = cfg.train
     parts = {
-        "train.n_flows": flow_table_bytes(cfg.evaluation.flow, t.n_flows, dtype, interval)
+        "train.n_flows": flow_table_bytes(cfg.spec.flow, t.n_flows, dtype, interval)
         + t.n_flows * t.n_swimmers * SWIMMER_BYTES,
         "train.frames_per_batch": t.frames_per_batch * FRAME_BYTES,
         "eval.flows_per_batch": flow_table_bytes(held.flow, eval_flows, dtype, interval)

@@ -3,7 +3,7 @@ r"""A training run in a directory: fresh start, resume, final evaluation, ``metr
 Rules for the run directory (checked before any compute):
 
 * one process at a time: a run holds the directory's lock
-  (:func:`~swimrl.evaluation.jobs.run_lock`), taken before the rules below are checked again;
+  (:func:`~swimrl.runs.jobs.run_lock`), taken before the rules below are checked again;
   a second process is refused (one line naming the holder's PID);
 * ``metrics.json`` exists (the run finished): error unless ``overwrite=true``, which deletes
   the run's outputs (``checkpoints/``, ``policy.pt``, ``metrics.json``, ``tb/``) and trains
@@ -14,7 +14,7 @@ Rules for the run directory (checked before any compute):
   sweep can always be (re)launched with ``resume=true``: finished jobs are skipped, killed
   ones continue, missing ones start;
 * a resumed run must have the same config as the checkpoint (whose renamed keys are first
-  moved to their current names, :func:`~swimrl.rl.checkpoint.upgrade_config`), except for
+  moved to their current names, :func:`~swimrl.runs.checkpoint.upgrade_config`), except for
   the runtime keys in :data:`RESUME_FREE_KEYS` and the ``eval.*`` / periodic evaluation
   sizes.
 """
@@ -28,17 +28,17 @@ from pathlib import Path
 
 from swimrl.errors import ConfigError
 from swimrl.evaluation.compare import CompareConfig, compare, strategy_variants
-from swimrl.evaluation.jobs import (
+from swimrl.rl.plan import TrainConfig, TrainPlan, check_train_memory, make_plan
+from swimrl.rl.trainer import PPOTrainer
+from swimrl.runs.checkpoint import load_checkpoint, upgrade_config
+from swimrl.runs.jobs import (
     EvaluationInterruptedError,
     preemption_signals,
     refuse_if_locked,
     run_lock,
 )
-from swimrl.evaluation.records import flatten, summary_line, write_comparison, write_json
-from swimrl.policies.files import RunLayout
-from swimrl.rl.checkpoint import load_checkpoint, upgrade_config
-from swimrl.rl.plan import TrainConfig, TrainPlan, check_train_memory, make_plan
-from swimrl.rl.trainer import PPOTrainer
+from swimrl.runs.layout import RunLayout
+from swimrl.runs.records import flatten, summary_line, write_comparison, write_json
 
 log = logging.getLogger(__name__)
 
@@ -79,7 +79,7 @@ def config_differences(old: dict, new: dict) -> list[str]:
 
 def clean_run_dir(out: Path) -> None:
     """Delete the outputs of a previous run in ``out`` (``overwrite=true``):
-    :attr:`~swimrl.policies.files.RunLayout.training_outputs`."""
+    :attr:`~swimrl.runs.layout.RunLayout.training_outputs`."""
     for path in RunLayout(out).training_outputs:
         if path.is_dir():
             shutil.rmtree(path)
@@ -114,7 +114,7 @@ def check_run(cfg: TrainConfig, out: Path | None) -> str | None:
     """Everything checked before any compute (the config's values were checked when ``cfg``
     was made): that the run fits the machine's memory
     (:func:`~swimrl.rl.plan.check_train_memory`) and, for a known run directory ``out``, that
-    no other process holds it (:func:`~swimrl.evaluation.jobs.refuse_if_locked`) and the
+    no other process holds it (:func:`~swimrl.runs.jobs.refuse_if_locked`) and the
     run-directory rules (:func:`run_dir_state`)."""
     check_train_memory(cfg)
     if out is None:
@@ -124,13 +124,13 @@ def check_run(cfg: TrainConfig, out: Path | None) -> str | None:
 
 
 def train(cfg: TrainConfig, out: Path) -> dict | None:
-    """Train (or resume) in ``out``, holding its lock (:func:`~swimrl.evaluation.jobs.run_lock`)
+    """Train (or resume) in ``out``, holding its lock (:func:`~swimrl.runs.jobs.run_lock`)
     throughout; returns the final metrics, or None if stopped early or already finished.
 
-    A preemption signal (:func:`~swimrl.evaluation.jobs.preemption_signals`) during the
+    A preemption signal (:func:`~swimrl.runs.jobs.preemption_signals`) during the
     updates stops the run after the update in flight (or inside an evaluation, before its next
-    decision) with a checkpoint and raises :class:`~swimrl.evaluation.jobs.Preempted` (exit
-    status :data:`~swimrl.evaluation.jobs.PREEMPTED_EXIT`); ``resume=true`` then continues
+    decision) with a checkpoint and raises :class:`~swimrl.runs.jobs.Preempted` (exit
+    status :data:`~swimrl.runs.jobs.PREEMPTED_EXIT`); ``resume=true`` then continues
     with the evaluation that was stopped (periodic or final).
 
     Parameters
@@ -139,7 +139,7 @@ def train(cfg: TrainConfig, out: Path) -> dict | None:
         The checked training config (:func:`swimrl.config.train_config`).
     out
         The run directory: ``policy.pt``, ``metrics.json``, ``curves.csv``, ``tb/``,
-        ``checkpoints/``, ``policies/`` (:class:`~swimrl.policies.files.RunLayout`).
+        ``checkpoints/``, ``policies/`` (:class:`~swimrl.runs.layout.RunLayout`).
 
     Returns
     -------

@@ -17,7 +17,7 @@ so successive points share their randomness); update 0 is the initial policy.
 
 Resume: the state after an update is checkpointed atomically; ``resume=true`` reloads it
 (networks, optimisers, schedulers, RNGs, counters) and continues with update ``u + 1``; a
-preemption signal (:mod:`swimrl.evaluation.jobs`) stops the loop after the update in flight,
+preemption signal (:mod:`swimrl.runs.jobs`) stops the loop after the update in flight,
 or inside a periodic evaluation before its next decision, with a checkpoint; an evaluation
 stopped so is marked in the checkpoint (``counters["eval_pending"]``) and made first on resume.
 Collector and environment are *not* checkpointed mid-episode: the resumed run starts fresh
@@ -40,14 +40,16 @@ from torch.profiler import record_function
 from tqdm.auto import tqdm
 
 from swimrl.errors import NonFiniteError
-from swimrl.evaluation.jobs import EvaluationInterruptedError, Preemption
-from swimrl.evaluation.rollout import EvalSetup, evaluate
-from swimrl.policies.files import RunLayout, load_file, policy_meta, save_policy
+from swimrl.evaluation.rollout import evaluate
 from swimrl.policies.networks import deterministic_actor, policy_std
 from swimrl.rl import builders as rlb
-from swimrl.rl.checkpoint import capture_rng, restore_rng, save_checkpoint
-from swimrl.rl.curves import read_curves_csv, write_curves
 from swimrl.rl.plan import TrainConfig, TrainPlan
+from swimrl.runs.checkpoint import capture_rng, restore_rng, save_checkpoint
+from swimrl.runs.curves import read_curves_csv, write_curves
+from swimrl.runs.jobs import EvaluationInterruptedError, Preemption
+from swimrl.runs.layout import RunLayout
+from swimrl.runs.policy_files import load_file, policy_meta, save_policy
+from swimrl.runs.spec import RunSpec
 
 log = logging.getLogger(__name__)
 
@@ -72,7 +74,7 @@ class PPOTrainer:
         rt, t = cfg.runtime, cfg.train
         self.device, self.dtype = rt.device, rt.dtype
         torch.manual_seed(cfg.seed)  # network init, action sampling, minibatch order
-        self.env = rlb.make_env(cfg.evaluation.flow, cfg.params, rt, t, cfg.loss, plan.train_seed)
+        self.env = rlb.make_env(cfg.spec.flow, cfg.params, rt, t, cfg.loss, plan.train_seed)
         self.swimmer_env = rlb.base_env(self.env)
         self.reward_scale = rlb.reward_scale_of(self.env)
         self.actor = rlb.make_actor(cfg.model, self.env, rt)
@@ -175,12 +177,12 @@ class PPOTrainer:
         )
 
     # -- evaluation ---------------------------------------------------------------------------
-    def evaluate(self, setup: EvalSetup | None = None,
+    def evaluate(self, setup: RunSpec | None = None,
                  preemption: Preemption | None = None) -> dict:
         """Deterministic policy on held-out flows (``seed + EVAL_SEED_OFFSET``); default: the
         periodic evaluation's ``train.eval_flows x train.eval_swimmers``. ``preemption``
         (default :attr:`preemption`) stops it between two decisions
-        (:class:`~swimrl.evaluation.jobs.EvaluationInterruptedError`)."""
+        (:class:`~swimrl.runs.jobs.EvaluationInterruptedError`)."""
         if setup is None:
             t = self.cfg.train
             setup = self.cfg.held_out.resized(t.eval_flows, t.eval_swimmers)

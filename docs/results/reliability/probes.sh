@@ -45,7 +45,7 @@ probe "hydra.run.dir=afile/run (train)" afile/run swimrl-train $TINY hydra.run.d
 # 4. a policy file with NaN weights
 python - <<'PY'
 import torch
-from swimrl.policies.files import resolve_policy_file
+from swimrl.runs.policy_files import resolve_policy_file
 d = torch.load(resolve_policy_file("pretrained/ku10"), weights_only=True)
 k = next(iter(d["actor"])); d["actor"][k] = d["actor"][k] * float("nan")
 torch.save(d, "nan_policy.pt")

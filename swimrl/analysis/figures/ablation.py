@@ -31,11 +31,12 @@ from swimrl.analysis.signal_ablation import (
     draw_ratios,
     summarise_sets,
 )
-from swimrl.atomic import atomic_write_text
-from swimrl.evaluation.records import markdown_table, read_curves
 from swimrl.flows.labels import ku_display, ku_name
 from swimrl.policies.baselines import StrategyLabel
-from swimrl.policies.files import RunLayout
+from swimrl.runs.atomic import atomic_write_text
+from swimrl.runs.curves import read_curves
+from swimrl.runs.layout import RunLayout
+from swimrl.runs.records import markdown_table
 
 from .records import (
     Evaluation,

@@ -47,14 +47,16 @@ import numpy as np
 
 from swimrl.analysis.plots import pyplot
 from swimrl.analysis.policy_maps import lambda_maps
-from swimrl.atomic import atomic_write_text
-from swimrl.evaluation.records import markdown_table, read_curves, read_npz, write_npz
-from swimrl.evaluation.rollout import EvalSetup, EvalSizes
 from swimrl.evaluation.statistics import paired_ratio
 from swimrl.flows.build import StoredRunSpec
 from swimrl.flows.dns.store import store_status
 from swimrl.policies.baselines import StrategyLabel
-from swimrl.policies.files import RunLayout, resolve_policy_file
+from swimrl.runs.atomic import atomic_write_text
+from swimrl.runs.curves import read_curves
+from swimrl.runs.layout import RunLayout
+from swimrl.runs.policy_files import resolve_policy_file
+from swimrl.runs.records import markdown_table, read_npz, write_npz
+from swimrl.runs.spec import EvalSizes, RunSpec
 
 from .records import (
     FRAME_EVERY,
@@ -129,7 +131,7 @@ def make_record(cfg: FiguresConfig, dns: DNSFiguresConfig) -> dict[str, np.ndarr
     decision (position, orientation, Lambda). Lengths in units of the box."""
     spec = StoredRunSpec((Path(dns.store),), decode_n=dns.decode_n)
     sizes = EvalSizes(1, dns.n_swimmers, 1, cfg.progress, dns.n_swimmers)
-    setup = EvalSetup(flow=spec, params=cfg.params, runtime=cfg.runtime, sizes=sizes,
+    setup = RunSpec(flow=spec, params=cfg.params, runtime=cfg.runtime, sizes=sizes,
                       seed=cfg.seed, record={})
     a = record_strategies(setup, replay_strategies(dns.policy, dns.trained), "DNS", FRAME_EVERY)
     box = float(a["box"])

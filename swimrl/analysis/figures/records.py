@@ -59,14 +59,15 @@ from swimrl.errors import (
     keep_number_types,
     one_of,
 )
-from swimrl.evaluation.records import read_npz, write_json, write_npz
-from swimrl.evaluation.rollout import EvalSetup, EvalSizes, chunk_seed, evaluate_shared
+from swimrl.evaluation.rollout import chunk_seed, evaluate_shared
 from swimrl.evaluation.statistics import mean_std_sem, paired_ratio
 from swimrl.evaluation.trajectories import TrajectoryRecorder
 from swimrl.flows.build import StochasticSpec
 from swimrl.flows.labels import ku_display, ku_name
 from swimrl.policies.baselines import StrategyLabel, StrategySpec
-from swimrl.policies.files import load_policy, resolve_policy_file, sha256_file
+from swimrl.runs.policy_files import load_policy, resolve_policy_file, sha256_file
+from swimrl.runs.records import read_npz, write_json, write_npz
+from swimrl.runs.spec import EvalSizes, RunSpec
 from swimrl.runtime import Runtime
 
 #: The figures, in build order (the keys of :data:`swimrl.analysis.figures.build.BUILDERS`).
@@ -278,12 +279,12 @@ def cached(cfg: FiguresConfig, name: str, inputs: dict,
 
 
 def eval_setup(cfg: FiguresConfig, kubo: float, n_flows: int, n_swimmers: int,
-               **params) -> EvalSetup:
+               **params) -> RunSpec:
     """The evaluation of ``n_flows`` x ``n_swimmers`` at ``kubo`` in chunks of
     ``figures.flows_per_batch`` flows (``params``: fields of ``cfg.params`` changed)."""
     sizes = EvalSizes(n_flows, n_swimmers, min(cfg.flows_per_batch, n_flows), cfg.progress,
                       n_swimmers)
-    return EvalSetup(flow=replace(cfg.flow, kubo=float(kubo)),
+    return RunSpec(flow=replace(cfg.flow, kubo=float(kubo)),
                      params=replace(cfg.params, **params) if params else cfg.params,
                      runtime=cfg.runtime, sizes=sizes, seed=cfg.seed, record={})
 
@@ -299,7 +300,7 @@ def run_policy(cfg: FiguresConfig, kubo: float, seed: int) -> str:
     return portable(Path(cfg.curves) / f"{ku_name(kubo)}_seed{seed}" / "policy.pt")
 
 
-def cache_inputs(cfg: FiguresConfig, setup: EvalSetup, actors: list[str]) -> dict:
+def cache_inputs(cfg: FiguresConfig, setup: RunSpec, actors: list[str]) -> dict:
     """What an evaluation of ``actors`` on ``setup`` depends on (the cache key)."""
     files = {a: sha256_file(resolve_policy_file(a))[:16] for a in actors if is_policy(a)}
     return {"flow": asdict(setup.flow), "params": asdict(setup.params),
@@ -322,7 +323,7 @@ def actor(name: str, params: EnvParams):
     return load_policy(name, params)
 
 
-def record_strategies(setup: EvalSetup, actors: list[str], desc: str,
+def record_strategies(setup: RunSpec, actors: list[str], desc: str,
                       field_every: int = 0) -> dict[str, np.ndarray]:
     """Every decision of every swimmer of ``actors`` (policy specs, ``naive``, ``sto``,
     ``naive(L)``) sharing the flows of ``setup``: the recorder's arrays."""
@@ -341,7 +342,7 @@ class Evaluation:
     group: str
     """The evaluations of a record with one size (``sweep``, ``statistics``,
     ``trajectories``)."""
-    setup: EvalSetup
+    setup: RunSpec
     actors: Mapping[str, str] = field(default_factory=dict)
     """Name shown -> actor name (:func:`actor`), in the order of the strategy blocks."""
     options: Mapping[str, object] = field(default_factory=dict)
@@ -392,7 +393,7 @@ def ku_record(cfg: FiguresConfig, kubo: float) -> dict[str, np.ndarray]:
     return cached(cfg, f"ku_{ku_name(kubo)}", inputs, compute)
 
 
-def flow_vorticity(setup: EvalSetup) -> np.ndarray:
+def flow_vorticity(setup: RunSpec) -> np.ndarray:
     """``omega tau_K`` on the grid, ``(n, n)`` (``[y, x]``), of flow 0 of ``setup`` at
     ``t = 0``: the realisation its evaluation starts in (same seed, same draws)."""
     n_c = min(setup.sizes.flows_per_batch, setup.sizes.n_flows)
@@ -402,7 +403,7 @@ def flow_vorticity(setup: EvalSetup) -> np.ndarray:
     return (env.flow.grid_fields()[0, ..., 4] * env.tau_k).cpu().double().numpy()
 
 
-def per_flow_record(cfg: FiguresConfig, setup: EvalSetup, actors: list[str]) -> np.ndarray:
+def per_flow_record(cfg: FiguresConfig, setup: RunSpec, actors: list[str]) -> np.ndarray:
     """Per-flow R_hat ``(len(actors), F)`` of ``actors`` on the shared flows of ``setup``
     (cached: evaluations with the same inputs are made once, whichever figure asks)."""
     def compute() -> dict[str, np.ndarray]:

@@ -11,10 +11,10 @@ import numpy as np
 
 from swimrl.analysis.performance import load, summarise
 from swimrl.analysis.plots import pyplot
-from swimrl.evaluation.rollout import EvalSizes
 from swimrl.flows.labels import ku_display, ku_name
 from swimrl.policies.baselines import StrategyLabel
-from swimrl.policies.files import RunLayout
+from swimrl.runs.layout import RunLayout
+from swimrl.runs.spec import EvalSizes
 
 from .records import (
     KUS,

@@ -12,9 +12,9 @@ import numpy as np
 
 from swimrl.analysis.plots import pyplot
 from swimrl.analysis.training_curves import PAPER_EPISODE_FRAMES, draw_curve
-from swimrl.evaluation.records import read_curves
 from swimrl.flows.labels import ku_display, parse_ku_name
-from swimrl.policies.files import RunLayout
+from swimrl.runs.curves import read_curves
+from swimrl.runs.layout import RunLayout
 
 from .records import FiguresConfig
 from .style import save, shown

@@ -2,8 +2,8 @@ r"""Policy files: the format written by ``swimrl-train`` and the loader behind
 ``swimrl-eval strategy=policy policy=SPEC``.
 
 A run directory (its files: :class:`RunLayout`) holds ``policy.pt`` (the final actor +
-metadata) and ``checkpoints/last.pt`` (the full training state, :mod:`swimrl.rl.checkpoint`);
-both are written atomically (:func:`swimrl.atomic.atomic_write`) and hold tensors and plain
+metadata) and ``checkpoints/last.pt`` (the full training state, :mod:`swimrl.runs.checkpoint`);
+both are written atomically (:func:`swimrl.runs.atomic.atomic_write`) and hold tensors and plain
 containers only. ``SPEC`` is one of
 
 * a training run directory (its ``policy.pt``, else its ``checkpoints/last.pt``);
@@ -25,14 +25,12 @@ from __future__ import annotations
 import dataclasses
 import hashlib
 import importlib.resources
-from dataclasses import dataclass
 from pathlib import Path
 
 import torch
 import yaml
 from tensordict.nn import TensorDictModule
 
-from swimrl.atomic import atomic_write
 from swimrl.env import EnvParams
 from swimrl.errors import BadFileError, ConfigError
 from swimrl.flows.labels import parse_ku_name
@@ -43,6 +41,8 @@ from swimrl.policies.networks import (
     deterministic_actor,
     tanh_normal_actor,
 )
+from swimrl.runs.atomic import atomic_write
+from swimrl.runs.layout import RunLayout
 
 CHECKPOINT_FORMAT = "swimrl-ppo-checkpoint/1"
 POLICY_FORMAT = "swimrl-ppo-policy/1"
@@ -51,115 +51,6 @@ POLICY_FORMAT = "swimrl-ppo-policy/1"
 PRETRAINED_ROOT = Path(__file__).resolve().parent / "pretrained"
 PRETRAINED_PREFIX = "pretrained/"
 SHORT_NAMES = ("ku0.1", "ku1", "ku10", "ku1e7")
-
-
-@dataclass(frozen=True)
-class RunLayout:
-    """Every file of a run directory ``root``, named here once::
-
-        checkpoints/last.pt        checkpoint: the full training state (swimrl.rl.checkpoint)
-        checkpoints/prev.pt        prev_checkpoint: the checkpoint before it
-        policy.pt                  policy: the final actor + metadata
-        policies/policy_<F>.pt     periodic_policy(F): the policy evaluated at F frames
-        metrics.json               metrics: a final evaluation (swimrl-eval, swimrl-train)
-        curves.csv                 curves: the training curves (swimrl.rl.curves)
-        tb/                        tb: TensorBoard event files (tb/ppo/)
-        trajectories.npz           trajectories: every decision of recorded swimmers
-        comparison.json, .md       comparison, comparison_table (swimrl-compare)
-        comparison.partial.json    comparison_partial: an unfinished comparison's chunks
-        naive_scan.png             naive_scan_plot
-        fit.json                   fit (swimrl-fit-minimal)
-        gain_scan.json, .md        gain_scan, gain_scan_table (swimrl-gain-scan)
-        .lock                      lock: the one process working here (evaluation.jobs)
-    """
-
-    root: Path
-
-    def __post_init__(self) -> None:
-        object.__setattr__(self, "root", Path(self.root))
-
-    @property
-    def checkpoints(self) -> Path:
-        return self.root / "checkpoints"
-
-    @property
-    def checkpoint(self) -> Path:
-        return self.checkpoints / "last.pt"
-
-    @property
-    def prev_checkpoint(self) -> Path:
-        return self.checkpoints / "prev.pt"
-
-    @property
-    def policy(self) -> Path:
-        return self.root / "policy.pt"
-
-    @property
-    def policies(self) -> Path:
-        return self.root / "policies"
-
-    def periodic_policy(self, frames: int) -> Path:
-        return self.policies / f"policy_{frames}.pt"
-
-    @property
-    def metrics(self) -> Path:
-        return self.root / "metrics.json"
-
-    @property
-    def curves(self) -> Path:
-        return self.root / "curves.csv"
-
-    @property
-    def tb(self) -> Path:
-        return self.root / "tb"
-
-    @property
-    def trajectories(self) -> Path:
-        return self.root / "trajectories.npz"
-
-    @property
-    def comparison(self) -> Path:
-        return self.root / "comparison.json"
-
-    @property
-    def comparison_table(self) -> Path:
-        return self.root / "comparison.md"
-
-    @property
-    def comparison_partial(self) -> Path:
-        return self.root / "comparison.partial.json"
-
-    @property
-    def naive_scan_plot(self) -> Path:
-        return self.root / "naive_scan.png"
-
-    @property
-    def fit(self) -> Path:
-        return self.root / "fit.json"
-
-    @property
-    def gain_scan(self) -> Path:
-        return self.root / "gain_scan.json"
-
-    @property
-    def gain_scan_table(self) -> Path:
-        return self.root / "gain_scan.md"
-
-    @property
-    def lock(self) -> Path:
-        return self.root / ".lock"
-
-    @property
-    def results(self) -> tuple[Path, ...]:
-        """The records whose presence marks a run as finished (one per command)."""
-        return (self.metrics, self.comparison, self.fit, self.gain_scan)
-
-    @property
-    def training_outputs(self) -> tuple[Path, ...]:
-        """What a training run writes (deleted by ``overwrite=true``): directories, then
-        files."""
-        return (self.checkpoints, self.tb, self.policies, self.policy, self.metrics,
-                self.curves, self.comparison, self.comparison_table)
 
 
 def load_file(path: Path, map_location="cpu") -> dict:

@@ -2,7 +2,7 @@
 
 ``metrics.json`` (``swimrl-eval``, ``swimrl-train``), ``comparison.json`` (``swimrl-compare``)
 and the other records are written with :func:`write_json` (atomically:
-:func:`swimrl.atomic.atomic_write`; an existing record is never replaced unless asked; standard
+:func:`swimrl.runs.atomic.atomic_write`; an existing record is never replaced unless asked; standard
 JSON only: a record holding NaN or an infinity is refused and nothing is written). Every table
 the commands print or write goes through :func:`markdown_table` / :func:`csv_table`.
 """
@@ -18,10 +18,10 @@ from pathlib import Path
 
 import numpy as np
 
-from swimrl.atomic import atomic_write, atomic_write_text
 from swimrl.errors import NonFiniteError
 from swimrl.flows.labels import flow_display
-from swimrl.policies.files import RunLayout
+from swimrl.runs.atomic import atomic_write, atomic_write_text
+from swimrl.runs.layout import RunLayout
 
 
 def refuse_overwrite(path: Path, overwrite: bool) -> None:
@@ -65,19 +65,6 @@ def read_npz(path: Path) -> dict:
     """Every array of an ``.npz`` file, loaded."""
     with np.load(path) as z:
         return {k: z[k] for k in z.files}
-
-
-def read_curves(path: Path) -> dict[str, np.ndarray]:
-    """Columns of a ``curves.csv`` (``swimrl-train``; a run directory or the file) as float
-    arrays, NaN where a cell is empty."""
-    path = Path(path)
-    if path.is_dir():
-        path = RunLayout(path).curves
-    with open(path, newline="") as fh:
-        rows = list(csv.DictReader(fh))
-    if not rows:
-        return {}
-    return {k: np.array([float(r[k]) if r[k] else np.nan for r in rows]) for k in rows[0]}
 
 
 def markdown_table(head: Sequence[str], rows: Sequence[Sequence[str]]) -> str:

@@ -1,6 +1,6 @@
-r"""Atomic checkpoints of a training run (the exported policy: :mod:`swimrl.policies.files`).
+r"""Atomic checkpoints of a training run (the exported policy: :mod:`swimrl.runs.policy_files`).
 
-The files of a run directory (:class:`~swimrl.policies.files.RunLayout`)::
+The files of a run directory (:class:`~swimrl.runs.layout.RunLayout`)::
 
     <run>/checkpoints/last.pt   full training state (this module), replaced atomically
     <run>/checkpoints/prev.pt   the checkpoint before it (resumed from if last.pt is corrupt)
@@ -13,7 +13,7 @@ The files of a run directory (:class:`~swimrl.policies.files.RunLayout`)::
 shuffling, and the environment's generator, which drives flows and initial conditions),
 the counters (frames, updates, episodes, wall time), the resolved config, the signal
 names, the env parameters and the network shape. Files are written atomically
-(:func:`swimrl.atomic.atomic_write`: a temporary file, ``fsync``, :func:`os.replace`), so a
+(:func:`swimrl.runs.atomic.atomic_write`: a temporary file, ``fsync``, :func:`os.replace`), so a
 kill at any moment (even ``kill -9``) leaves either the previous or the new checkpoint, never
 a truncated one. The previous ``last.pt`` is kept as ``prev.pt`` (a hard link made before the
 replacement, so ``last.pt`` always exists): a
@@ -29,10 +29,11 @@ from pathlib import Path
 
 import torch
 
-from swimrl.atomic import atomic_write, temp_path
 from swimrl.errors import BadFileError
-from swimrl.policies.files import CHECKPOINT_FORMAT, RunLayout, load_file
 from swimrl.policies.networks import NO_STD_BOUND
+from swimrl.runs.atomic import atomic_write, temp_path
+from swimrl.runs.layout import RunLayout
+from swimrl.runs.policy_files import CHECKPOINT_FORMAT, load_file
 
 log = logging.getLogger(__name__)
 

@@ -7,7 +7,7 @@ from a fresh clone without the event files; a run resumed from such a committed 
 checkpoint and ``curves.csv``, no event files) passes the CSV's rows up to its checkpoint as
 ``base`` to :func:`write_curves`, so its curve stays whole.
 
-    swimrl-curves RUN_DIR [--out RUN_DIR/curves.csv]     # or: python -m swimrl.rl.curves
+    swimrl-curves RUN_DIR [--out RUN_DIR/curves.csv]     # or: python -m swimrl.runs.curves
 """
 
 from __future__ import annotations
@@ -20,9 +20,8 @@ from pathlib import Path
 
 import numpy as np
 
-from swimrl.atomic import atomic_write_text
-from swimrl.evaluation.records import read_curves
-from swimrl.policies.files import RunLayout
+from swimrl.runs.atomic import atomic_write_text
+from swimrl.runs.layout import RunLayout
 
 #: Tags exported by default (see the monitoring table of docs/training.md).
 CURVE_TAGS = (
@@ -44,6 +43,19 @@ CURVE_TAGS = (
 )
 
 
+def read_curves(path: Path) -> dict[str, np.ndarray]:
+    """Columns of a ``curves.csv`` (``swimrl-train``; a run directory or the file) as float
+    arrays, NaN where a cell is empty."""
+    path = Path(path)
+    if path.is_dir():
+        path = RunLayout(path).curves
+    with open(path, newline="") as fh:
+        rows = list(csv.DictReader(fh))
+    if not rows:
+        return {}
+    return {k: np.array([float(r[k]) if r[k] else np.nan for r in rows]) for k in rows[0]}
+
+
 def read_scalars(run_dir: Path, tags=CURVE_TAGS) -> dict[int, dict[str, float]]:
     """``{frames: {tag: value}}`` from every event file under ``run_dir/tb`` (by wall time,
     so the last write of a step wins)."""
@@ -63,7 +75,7 @@ def read_scalars(run_dir: Path, tags=CURVE_TAGS) -> dict[int, dict[str, float]]:
 
 def read_curves_csv(path: Path) -> dict[int, dict[str, float]]:
     """``{frames: {tag: value}}`` of a ``curves.csv`` (empty cells left out): the rows of
-    :func:`swimrl.evaluation.records.read_curves`."""
+    :func:`swimrl.runs.curves.read_curves`."""
     cols = read_curves(path)
     tags = [t for t in cols if t != "frames"]
     return {int(f): {t: float(cols[t][i]) for t in tags if np.isfinite(cols[t][i])}

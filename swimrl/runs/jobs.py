@@ -22,7 +22,7 @@ thread, never over an ignored signal (``SIG_IGN``), and the previous ones are re
 leaving the context.
 
 **One writer per run directory.** :func:`run_lock` holds an exclusive ``flock`` on
-``<run dir>/.lock`` (:attr:`RunLayout.lock <swimrl.policies.files.RunLayout.lock>`, one JSON line:
+``<run dir>/.lock`` (:attr:`RunLayout.lock <swimrl.runs.layout.RunLayout.lock>`, one JSON line:
 the holder's ``pid``, ``host``, ``command`` and start time ``since``) for the whole run; a
 second process on the same directory gets :class:`RunDirInUseError` (a ``FileExistsError``:
 one line, exit status 2) naming the holder. The kernel releases the lock when its process
@@ -49,7 +49,7 @@ from datetime import datetime, timezone
 from pathlib import Path
 from typing import NoReturn
 
-from swimrl.policies.files import RunLayout
+from swimrl.runs.layout import RunLayout
 
 log = logging.getLogger(__name__)
 
