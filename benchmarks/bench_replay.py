@@ -213,7 +213,7 @@ def main() -> None:
 
 
 #: --smoke: every training run of 2 flows x 4 swimmers, L = 10 decisions, eager.
-SMOKE_TRAIN = ("train.n_flows=2", "train.n_swimmers=4", "train.frames_per_batch=80",
+SMOKE_TRAIN = ("train.n_flows=2", "train.n_swimmers=4", "train.rollout_length=10",
                "train.minibatch_size=40", "train.epochs=1", "train.compile=false",
                "eval.n_flows=1", "eval.n_swimmers=4")
 

@@ -64,7 +64,7 @@ VARIANTS = {
 #: --smoke: every preset on a tiny grid and batch (episodes of N = 20 decisions, L = 10).
 SMOKE_OVERRIDES = [
     "flow.n_grid=64", "flow.spacing=0.1", "episode.duration=2.0", "train.n_flows=2",
-    "train.n_swimmers=4", "train.frames_per_batch=80", "train.total_frames=320",
+    "train.n_swimmers=4", "train.rollout_length=10", "train.total_frames=320",
     "train.minibatch_size=40", "train.minibatches_per_epoch=null", "train.epochs=2",
     "train.eval_flows=1", "train.eval_swimmers=4", "eval.n_flows=1", "eval.n_swimmers=4",
     "train.progress=false", "train.stagger=1",

@@ -73,7 +73,7 @@ if [ "${SMOKE:-0}" = 1 ]; then
   ENV_DEFAULT="--smoke --kernels eager"
   EVAL_DEFAULT="--smoke"
   TRAIN_SIZES="flow.n_grid=64 flow.spacing=0.1 episode.duration=2.0 train.n_flows=2
-    train.n_swimmers=4 train.frames_per_batch=80 train.minibatch_size=40
+    train.n_swimmers=4 train.rollout_length=10 train.minibatch_size=40
     train.minibatches_per_epoch=null train.epochs=1 train.compile=false train.stagger=1 train.eval_flows=1
     train.eval_swimmers=4 eval.n_flows=1 eval.n_swimmers=4"
   GRAPHS=

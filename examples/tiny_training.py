@@ -36,7 +36,7 @@ OUT.mkdir(parents=True, exist_ok=True)
 # The overrides are those of the command line:
 # `swimrl-train flow.kubo=10 episode.duration=20 train.n_flows=16 ...`. Episodes are
 # shortened to `T = 20 τ_K` (200 decisions); each PPO update collects
-# `train.frames_per_batch` decisions of `train.n_flows × train.n_swimmers` swimmers. Every
+# `train.rollout_length` decisions of each of the `train.n_flows × train.n_swimmers` swimmers. Every
 # `train.eval_every` updates the deterministic policy is evaluated on held-out flows (the
 # `eval/R_hat` curve); at the end `train.compare_baselines=true` evaluates STO and naive on
 # the final evaluation's flows. `overwrite=true` lets the example run again in the same
@@ -44,11 +44,11 @@ OUT.mkdir(parents=True, exist_ok=True)
 
 # %%
 TINY = ["flow.n_grid=64", "flow.spacing=0.1", "episode.duration=2.0", "kernel=eager",
-        "train.n_flows=2", "train.n_swimmers=4", "train.frames_per_batch=80",
+        "train.n_flows=2", "train.n_swimmers=4", "train.rollout_length=10",
         "train.total_frames=320", "train.minibatch_size=40", "train.eval_every=2",
         "train.eval_flows=1", "train.eval_swimmers=4", "eval.n_flows=2", "eval.n_swimmers=4"]
 FULL = ["episode.duration=20.0", "train.n_flows=16", "train.n_swimmers=8",
-        "train.frames_per_batch=6400", "train.total_frames=640000", "train.minibatch_size=640",
+        "train.rollout_length=50", "train.total_frames=640000", "train.minibatch_size=640",
         "train.eval_every=10", "train.eval_flows=2", "train.eval_swimmers=32",
         "eval.n_flows=4", "eval.n_swimmers=50"]
 sizes = TINY if SMALL else FULL

@@ -1,4 +1,5 @@
-"""The only module that reads a Hydra config: each command's ``DictConfig`` -> typed objects.
+"""Each command's Hydra ``DictConfig`` -> typed objects (the paper's figures map theirs in
+:mod:`swimrl.paper.config` with the functions of this module).
 
 Every ``*_config`` function only maps the config keys onto the typed objects of the library
 (:class:`~swimrl.env.EnvParams`, :class:`~swimrl.flows.build.StochasticSpec`,
@@ -12,7 +13,7 @@ One mapping: :func:`from_node` builds a dataclass from the config groups that ho
 fields, by field name, each number converted to the type its field declares; the fields
 named otherwise in the yaml (``spinup.time`` -> ``spinup_time``) or built from several keys
 are passed to it. Every key is read as it is: the yaml holds every value that runs (a
-dataclass default is the yaml's value, ``tests/test_config_sources.py``), and the keys an old
+dataclass default is read from the yaml by :mod:`swimrl.conf_values`), and the keys an old
 checkpoint lacks are upgraded in :mod:`swimrl.runs.checkpoint`, not here.
 """
 
@@ -26,7 +27,6 @@ from pathlib import Path
 
 from omegaconf import DictConfig, ListConfig, OmegaConf
 
-from swimrl.analysis.figures.records import DNSFiguresConfig, FiguresConfig
 from swimrl.analysis.fit_minimal import FitConfig, read_coefficients
 from swimrl.analysis.gain_scan import GainScanConfig
 from swimrl.env import EnvParams
@@ -43,7 +43,7 @@ from swimrl.flows.build import (
 )
 from swimrl.flows.dns.params import DNSParams
 from swimrl.flows.dns.run import DNSRun
-from swimrl.flows.labels import flow_tag, kubo_label
+from swimrl.flows.labels import ku_name
 from swimrl.policies.baselines import StrategySpec
 from swimrl.policies.networks import ModelSpec
 from swimrl.rl.plan import LossSettings, OptimSettings, TrainConfig, TrainSettings
@@ -51,13 +51,13 @@ from swimrl.runs.spec import EvalSizes, RunSpec
 from swimrl.runtime import Runtime
 from swimrl.task import RewardSpec, TaskSpec
 
-#: ``${flow_tag:${flow}}`` -> ``ku10.0`` for the stochastic flow, else its name (run directories)
-OmegaConf.register_new_resolver(
-    "flow_tag",
-    lambda flow: flow_tag(flow.name, flow.kubo if flow.name == "stochastic" else None),
-    replace=True)
-#: ``${ku:${flow.kubo}}`` -> ``0.1``, ``1``, ``10``, ``1e7`` (names of policies and records per Ku)
-OmegaConf.register_new_resolver("ku", kubo_label, replace=True)
+#: ``${flow_tag:${flow}}`` -> ``ku1e7`` (:func:`~swimrl.flows.labels.ku_name`) for the
+#: stochastic flow, else its name (run directories)
+OmegaConf.register_new_resolver("flow_tag", ku_name, replace=True)
+#: ``${ku:${flow.kubo}}`` -> ``0.1``, ``1``, ``10``, ``1e7``: the same label without its ``ku``
+#: (``ku${ku:${flow.kubo}}``: names of policies and records per Ku)
+OmegaConf.register_new_resolver("ku", lambda kubo: ku_name(float(kubo)).removeprefix("ku"),
+                                replace=True)
 
 
 def _int(value):
@@ -202,35 +202,6 @@ def gain_scan_config(cfg: DictConfig) -> GainScanConfig:
     ev = eval_config(cfg)
     return from_node(GainScanConfig, {"": cfg}, setup=ev.setup, policy=ev.policy,
                      overwrite=ev.overwrite)
-
-
-def figures_config(cfg: DictConfig) -> FiguresConfig:
-    """``swimrl-figures`` (``conf/figures.yaml``); paths are taken from the launch directory."""
-    from hydra.utils import to_absolute_path
-
-    def path(value) -> Path:
-        return Path(to_absolute_path(str(value)))
-
-    rt = runtime(cfg)
-    return from_node(
-        FiguresConfig, {"figures.": cfg.figures, "": cfg},
-        out=path(cfg.out), cache=path(cfg.cache), runtime=rt, flow=flow_spec(cfg.flow, rt),
-        params=env_params(cfg), results=path(cfg.results), curves=path(cfg.curves),
-        fits=path(cfg.fits), ablation=path(cfg.ablation), records=path(cfg.records),
-        beyond=path(cfg.beyond),
-        dns=None if cfg.dns is None else dns_figures_config(cfg.dns, path),
-    )
-
-
-def dns_figures_config(node: DictConfig, path) -> DNSFiguresConfig:
-    """``dns.*`` of ``conf/figures.yaml`` (``path``: a path from the launch directory); the
-    glyph times go to their check as written (it names them so)."""
-    return from_node(
-        DNSFiguresConfig, {"dns.": node},
-        store=path(node.store), record=path(node.record), transfer=path(node.transfer),
-        checks=path(node.checks), curves=tuple(path(c) for c in node.curves or ()),
-        glyph_window=node.glyph_window, glyph_every=node.glyph_every,
-    )
 
 
 def model_spec(node: DictConfig) -> ModelSpec:

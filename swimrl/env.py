@@ -43,12 +43,13 @@ from tensordict import TensorDict, TensorDictBase
 from torchrl.data import Bounded, Categorical, Composite, Unbounded
 from torchrl.envs import EnvBase
 
+from swimrl.conf_values import yaml_value
 from swimrl.errors import ConfigError, IntegrityError, as_float, keep_number_types
 from swimrl.flows.base import GriddedFlow
 from swimrl.flows.build import FlowSpec, build_flow
 from swimrl.physics.energy import drag_factor
 from swimrl.physics.integrator import select_kernel
-from swimrl.physics.signals import SIGNAL_NAMES, compute_signals, signal_indices
+from swimrl.physics.signals import compute_signals, signal_indices
 from swimrl.runtime import Runtime
 from swimrl.task import RewardSpec, TaskSpec
 
@@ -71,9 +72,10 @@ class EnvParams:
 
     ``shape_factor_max`` (``Lambda_max``) bounds the action: the environment's action spec is
     ``[-Lambda_max, Lambda_max]``, from which actors and baselines read it. ``task`` and
-    ``reward``: :mod:`swimrl.task`. The defaults (for library calls) are the configs'
-    ``swimmer.*``, ``episode.*``, ``signals=all``, ``task=displacement`` and ``reward.*``
-    (``tests/test_config_sources.py``): ``EnvParams()`` is the paper's swimmer and episode.
+    ``reward``: :mod:`swimrl.task`. The defaults (for library calls) are read from the
+    configs' ``swimmer.*``, ``episode.*``, ``signals=all``, ``task=displacement`` and
+    ``reward.*`` (:mod:`swimrl.conf_values`): ``EnvParams()`` is the paper's swimmer and
+    episode.
     A value out of range raises :class:`~swimrl.errors.ConfigError` naming its config key.
 
     Parameters
@@ -107,13 +109,13 @@ class EnvParams:
         Decisions per episode, ``N = T / T_u`` (2000).
     """
 
-    swim_speed: float = 0.707
-    rot_diffusion: float = 0.0
-    duration: float = 200.0
-    update_interval: float = 0.1
-    dt: float = 0.01
-    shape_factor_max: float = 0.98
-    signals: tuple[str, ...] = SIGNAL_NAMES
+    swim_speed: float = yaml_value("evaluate", "swimmer.swim_speed")
+    rot_diffusion: float = yaml_value("evaluate", "swimmer.rot_diffusion")
+    duration: float = yaml_value("evaluate", "episode.duration")
+    update_interval: float = yaml_value("evaluate", "episode.update_interval")
+    dt: float = yaml_value("evaluate", "episode.dt")
+    shape_factor_max: float = yaml_value("evaluate", "swimmer.shape_factor_max")
+    signals: tuple[str, ...] = yaml_value("signals/all", "names")
     task: TaskSpec = TaskSpec()
     reward: RewardSpec = RewardSpec()
     n_substeps: int = field(init=False)
@@ -147,6 +149,17 @@ class EnvParams:
             ),
         )
         keep_number_types(self)
+
+
+def clock_offsets(n_flows: int, n_decisions: int, groups: int, device=None
+                  ) -> torch.Tensor | None:
+    """The clock of flow ``f`` at the first reset: ``(f mod groups) floor(N / groups)``
+    (:meth:`SwimmerEnv.stagger`); None for ``groups = 1`` (no offset)."""
+    if groups < 1 or groups > n_flows:
+        raise ValueError(f"groups={groups} must be in [1, n_flows={n_flows}]")
+    if groups == 1:
+        return None
+    return (torch.arange(n_flows, device=device) % groups) * (n_decisions // groups)
 
 
 class SwimmerEnv(EnvBase):
@@ -194,7 +207,7 @@ class SwimmerEnv(EnvBase):
         n_swimmers: int,
         params: EnvParams,
         generator: torch.Generator | None = None,
-        kernel: str = "auto",
+        kernel: str = yaml_value("evaluate", "kernel"),
         ic_blocks: int = 1,
     ):
         if n_swimmers < 1:
@@ -280,6 +293,7 @@ class SwimmerEnv(EnvBase):
         n_swimmers: int,
         seed: int,
         ic_blocks: int = 1,
+        stagger: int = 1,
     ) -> SwimmerEnv:
         """Environment of ``n_flows x n_swimmers`` swimmers in new realisations of ``flow``;
         all randomness (flows, initial conditions, noise) from ``seed``; ``ic_blocks`` blocks
@@ -301,6 +315,8 @@ class SwimmerEnv(EnvBase):
             Seeds the one generator of the flows, the initial conditions and the noise.
         ic_blocks
             Blocks of swimmers per flow that start from the same positions and orientations.
+        stagger
+            Groups of flows whose episodes are offset (:meth:`stagger`; 1: none).
 
         Returns
         -------
@@ -308,12 +324,15 @@ class SwimmerEnv(EnvBase):
             The environment, not reset yet (TorchRL's ``reset`` or ``rollout`` does it).
         """
         device, dtype = runtime.device, runtime.dtype
+        offset = clock_offsets(n_flows, params.n_decisions, stagger, device)
         gen = torch.Generator(device=device).manual_seed(int(seed))
         realisations = build_flow(
             flow, n_flows, device, dtype, gen, params.update_interval, params.duration
         )
-        return cls(realisations, n_swimmers, params, generator=gen, kernel=runtime.kernel,
-                   ic_blocks=ic_blocks)
+        env = cls(realisations, n_swimmers, params, generator=gen, kernel=runtime.kernel,
+                  ic_blocks=ic_blocks)
+        env._clock_offset = offset
+        return env
 
     def stagger(self, groups: int) -> None:
         """Offset the episodes of ``groups`` groups of flows (flow ``f`` in group ``f mod
@@ -323,11 +342,8 @@ class SwimmerEnv(EnvBase):
         fraction of an episode after the previous group's. A training env's episode ends
         then redraw ``1/groups`` of the flows at a time instead of all at once, and a batch
         holds flows at ``groups`` phases of their episodes. ``groups = 1``: no offset."""
-        if groups < 1 or groups > self.flow.n_flows:
-            raise ValueError(f"groups={groups} must be in [1, n_flows={self.flow.n_flows}]")
-        step = self.params.n_decisions // groups
-        offset = (self._flows % groups) * step
-        self._clock_offset = offset if groups > 1 else None
+        self._clock_offset = clock_offsets(self.flow.n_flows, self.params.n_decisions, groups,
+                                           self._flows.device)
 
     # -- state helpers ------------------------------------------------------------------------
     @property

@@ -3,11 +3,12 @@
 from __future__ import annotations
 
 import os
-from dataclasses import dataclass
+from dataclasses import dataclass, field, fields
 from pathlib import Path
 
 import torch
 
+from swimrl.conf_values import yaml_value
 from swimrl.errors import ConfigError, one_of, require
 from swimrl.physics.integrator import KERNELS
 
@@ -62,11 +63,22 @@ def check_memory(need: int, device: torch.device, key: str, value, what: str) ->
         )
 
 
+#: Field metadata of a setting that changes how fast or where a run computes, or what it
+#: prints and how often it saves, but not what it computes: such a key may differ when a
+#: training run is resumed (:func:`runtime_keys`; ``swimrl.rl.run.RESUME_FREE_KEYS``).
+RUNTIME = {"runtime": True}
+
+
+def runtime_keys(cls, prefix: str = "") -> set[str]:
+    """``prefix + name`` of every field of the dataclass ``cls`` marked :data:`RUNTIME`."""
+    return {prefix + f.name for f in fields(cls) if f.metadata.get("runtime")}
+
+
 @dataclass(frozen=True)
 class Runtime:
     """``device``, ``dtype`` (``float32`` | ``float64``), ``threads`` (None: all cores) and
     ``kernel`` (``auto`` | ``eager`` | ``fused`` | ``compiled``), checked on construction.
-    The default ``kernel`` is the configs' (``tests/test_config_sources.py``); ``threads``
+    The default ``kernel`` is read from the configs (:mod:`swimrl.conf_values`); ``threads``
     differs between commands (``conf/evaluate.yaml``: all cores, ``conf/train.yaml``: 1)
     and has none.
 
@@ -84,14 +96,15 @@ class Runtime:
         ``compiled``.
     """
 
-    device: torch.device
+    device: torch.device = field(metadata=RUNTIME)
     dtype: torch.dtype
-    threads: int | None
-    kernel: str = "auto"
+    threads: int | None = field(metadata=RUNTIME)
+    kernel: str = field(default=yaml_value("evaluate", "kernel"), metadata=RUNTIME)
 
     @classmethod
     def from_names(
-        cls, device: str, dtype: str, threads: int | None, kernel: str = "auto"
+        cls, device: str, dtype: str, threads: int | None,
+        kernel: str = yaml_value("evaluate", "kernel"),
     ) -> Runtime:
         """From the config's strings (``device=cpu dtype=float32 threads=1 kernel=auto``)."""
         dev = resolve_device(str(device))

@@ -30,6 +30,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
+from swimrl.conf_values import yaml_value
 from swimrl.errors import as_float, keep_number_types, one_of
 
 #: The tasks (``task=NAME``); the first is the default.
@@ -39,8 +40,8 @@ TASKS = ("displacement", "target")
 @dataclass(frozen=True)
 class TaskSpec:
     """``task.*``: the task's name, the target distance ``D`` and the arrival radius (both in
-    units of ``ell_f``; read by ``task=target`` only). The defaults are
-    ``conf/task/displacement.yaml``'s (``tests/test_config_sources.py``).
+    units of ``ell_f``; read by ``task=target`` only). The defaults are read from
+    ``conf/task/displacement.yaml`` (:mod:`swimrl.conf_values`).
 
     Parameters
     ----------
@@ -53,9 +54,9 @@ class TaskSpec:
         ``task=target``: a swimmer this close to its target has arrived, ``< distance``.
     """
 
-    name: str = "displacement"
-    distance: float = 20.0
-    arrival_radius: float = 1.0
+    name: str = yaml_value("task/displacement", "name")
+    distance: float = yaml_value("task/displacement", "distance")
+    arrival_radius: float = yaml_value("task/displacement", "arrival_radius")
 
     def __post_init__(self) -> None:
         one_of("task.name", self.name, TASKS)
@@ -75,7 +76,7 @@ class TaskSpec:
 class RewardSpec:
     """``reward.*``: weights of the energy cost ``w K(Lambda) v_s T_u`` and of the
     shape-change cost ``w_c |Delta Lambda| v_s T_u`` per decision (0: the paper's reward).
-    The defaults are ``conf/evaluate.yaml``'s.
+    The defaults are read from ``conf/evaluate.yaml`` (:mod:`swimrl.conf_values`).
 
     Parameters
     ----------
@@ -86,8 +87,8 @@ class RewardSpec:
         ``w_c >= 0``: the cost of changing the shape between decisions.
     """
 
-    energy_weight: float = 0.0
-    shape_change_weight: float = 0.0
+    energy_weight: float = yaml_value("evaluate", "reward.energy_weight")
+    shape_change_weight: float = yaml_value("evaluate", "reward.shape_change_weight")
 
     def __post_init__(self) -> None:
         as_float("reward.energy_weight", self.energy_weight, lambda v: v >= 0, ">= 0")

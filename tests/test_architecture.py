@@ -4,6 +4,8 @@ docs/architecture.md names every module."""
 from __future__ import annotations
 
 import re
+import subprocess
+import sys
 from pathlib import Path
 
 import grimp
@@ -76,3 +78,18 @@ def test_architecture_names_every_module():
     assert sorted(modules - documented) == [], "modules missing from docs/architecture.md"
     gone = sorted(f for f in documented if not (PACKAGE / f).is_file())
     assert gone == [], "docs/architecture.md names files that do not exist"
+
+
+def test_the_library_imports_without_the_paper():
+    """``swimrl.paper`` (the paper's figures) sits on top: the library (every module but the
+    paper's and the commands') imports without it; checked in a fresh interpreter."""
+    library = sorted(
+        ".".join(("swimrl", *p.relative_to(PACKAGE).with_suffix("").parts)).removesuffix(
+            ".__init__") for p in PACKAGE.rglob("*.py")
+        if p.relative_to(PACKAGE).parts[0] not in ("paper", "cli"))
+    assert {"swimrl", "swimrl.config", "swimrl.analysis", "swimrl.rl.run"} <= set(library)
+    code = (f"import sys\nfor m in {library!r}:\n    __import__(m)\n"
+            "print(sorted(m for m in sys.modules if m.split('.')[:2] == ['swimrl', 'paper']))")
+    done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                          check=True)
+    assert done.stdout.strip() == "[]", done.stdout

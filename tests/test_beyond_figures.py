@@ -1,4 +1,4 @@
-"""Figures beyond the paper (swimrl.analysis.figures.beyond): the Pareto front, and both
+"""Figures beyond the paper (swimrl.paper.beyond): the Pareto front, and both
 figures drawn from tiny ``swimrl-compare`` records (``task=target`` at two distances; the
 displacement task with energies), or reported pending without them."""
 
@@ -11,9 +11,10 @@ from dataclasses import replace
 import numpy as np
 import pytest
 
-from swimrl.analysis.figures import beyond
-from swimrl.config import compare_config, figures_config
+from swimrl.config import compare_config
 from swimrl.evaluation.compare import compare
+from swimrl.paper import beyond
+from swimrl.paper.config import figures_config
 from swimrl.runs.policy_files import PRETRAINED_ROOT
 
 from .conftest import SMALL
@@ -86,21 +87,21 @@ def test_figures_from_comparison_records(compose_cfg, figures, tmp_path):
     assert "| Ku = 10 | 1 | target-STO |" in (tmp_path / "fig" / "beyondTarget.md").read_text()
     out = beyond.build_beyond_energy(figures)
     assert (tmp_path / "fig" / "beyondEnergy.png").is_file()
-    assert out["10.0"]["front"]  # at least one non-dominated row
+    assert out["ku10"]["front"]  # at least one non-dominated row
     assert (tmp_path / "fig" / "beyondEnergyMaps.png").is_file()
-    assert out["maps"] == {"10, w = 0": "pretrained/ku10", "10, w = 0.3": str(energy)}
+    assert out["maps"] == {"ku10_w0": "pretrained/ku10", "ku10_w0.3": str(energy)}
     out = beyond.build_beyond_target_paths(figures)
     assert (tmp_path / "fig" / "beyondTargetPaths.png").is_file()
-    assert out["10.0"]["distance"] == 2.0  # the middle of D = 1, 2
-    assert set(out["10.0"]["actors"]) == set(beyond.TARGET_KINDS)
-    cache = next((tmp_path / "cache").glob("target_paths_10_D2-*.npz"))
+    assert out["ku10"]["distance"] == 2.0  # the middle of D = 1, 2
+    assert set(out["ku10"]["actors"]) == set(beyond.TARGET_KINDS)
+    cache = next((tmp_path / "cache").glob("target_paths_ku10_D2-*.npz"))
     a = np.load(cache)
     xy = beyond.target_frame(a["position"][0], a["target"][0])
     gap = np.linalg.norm(xy[..., -1, :] - [2.0, 0.0], axis=-1)
     arrived = np.isfinite(a["arrival_time"][0])
     # an arrived swimmer ends within the arrival radius of its target and stops there
     assert np.all(gap[arrived] <= 0.5 + 1e-5) and np.all(gap[~arrived] > 0.5 - 1e-5)
-    assert [out["10.0"]["arrived"][k] for k in beyond.TARGET_KINDS] == arrived.sum(-1).tolist()
+    assert [out["ku10"]["arrived"][k] for k in beyond.TARGET_KINDS] == arrived.sum(-1).tolist()
 
 
 def test_target_frame():

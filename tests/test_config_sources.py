@@ -1,17 +1,20 @@
 """One source per value: the yaml (``conf/``) shows every value that runs.
 
 Every typed config that :mod:`swimrl.config` builds either has no default for a field the
-yaml sets, or its default equals the value the yaml composes for it, in every command's
-config that maps it. The same holds for the keyword defaults of the library calls that
-stand for a config group (``StochasticFlow(...)``, ``tanh_normal_actor(...)``,
-``strategy_variants(...)``). A default no yaml key stands for fails here too.
+yaml sets, or reads its default from the yaml (:func:`swimrl.conf_values.yaml_value`); so
+do the keyword defaults of the library calls that stand for a config group
+(``StochasticFlow(...)``, ``tanh_normal_actor(...)``, ``strategy_variants(...)``). Here: no
+default is written in Python where a yaml key stands for it, and each one read is the value
+the yaml composes for its key in every command's config that maps it (the right file, the
+right key). A default no yaml key stands for fails here too.
 """
 
 from __future__ import annotations
 
+import ast
 import dataclasses
 import inspect
-from pathlib import Path
+import textwrap
 
 import pytest
 import torch
@@ -19,9 +22,9 @@ from hydra import compose, initialize_config_module
 from omegaconf import OmegaConf
 
 import swimrl.config
-from swimrl.analysis.figures.records import DNSFiguresConfig, FiguresConfig
 from swimrl.analysis.fit_minimal import FitConfig
 from swimrl.analysis.gain_scan import GainScanConfig
+from swimrl.conf_values import yaml_value
 from swimrl.config import eval_config, strategy_spec
 from swimrl.env import EnvParams, SwimmerEnv
 from swimrl.errors import ConfigError
@@ -31,6 +34,7 @@ from swimrl.flows.build import LiveDNSSpec, StochasticSpec, StoredRunSpec
 from swimrl.flows.dns.params import DNSParams
 from swimrl.flows.dns.run import DNSRun
 from swimrl.flows.stochastic import StochasticFlow
+from swimrl.paper.records import DNSFiguresConfig, FiguresConfig
 from swimrl.policies.baselines import StrategySpec
 from swimrl.policies.networks import ModelSpec, make_mlp, tanh_normal_actor, value_critic
 from swimrl.rl.plan import LossSettings, OptimSettings, TrainConfig, TrainSettings
@@ -69,15 +73,11 @@ def defaults(obj) -> dict[str, object]:
 
 
 def _plain(value):
-    """Containers as lists, paths as strings, torch dtypes and devices by name."""
+    """Containers as lists, torch dtypes by name."""
     if isinstance(value, tuple | list):
         return [_plain(v) for v in value]
-    if isinstance(value, Path):
-        return str(value)
     if isinstance(value, torch.dtype):
         return str(value).replace("torch.", "")
-    if isinstance(value, torch.device):
-        return str(value)
     if dataclasses.is_dataclass(value) and not isinstance(value, type):
         return {f.name: _plain(getattr(value, f.name)) for f in dataclasses.fields(value)
                 if f.init}
@@ -95,11 +95,69 @@ def assert_defaults_are_the_yaml(obj, cfg, prefix: str = "", keys: dict | None =
             continue
         key = keys.get(name, prefix + name)
         value = OmegaConf.select(cfg, key, default=_ABSENT)
-        assert value is not _ABSENT, f"{obj.__name__}.{name} has a default but no yaml key {key}"
+        assert value is not _ABSENT, (
+            f"{obj.__qualname__}.{name} has a default but no yaml key {key}")
         if OmegaConf.is_config(value):
             value = OmegaConf.to_container(value)
         assert _plain(default) == _plain(value), (
-            f"{obj.__name__}.{name} = {default!r} but the yaml's {key} = {value!r}")
+            f"{obj.__qualname__}.{name} = {default!r} but the yaml's {key} = {value!r}")
+
+
+def written_defaults(obj) -> dict[str, ast.expr]:
+    """``name -> expression`` of the defaults as the source of ``obj`` writes them."""
+    node = ast.parse(textwrap.dedent(inspect.getsource(obj))).body[0]
+    if isinstance(node, ast.ClassDef):
+        return {s.target.id: s.value for s in node.body
+                if isinstance(s, ast.AnnAssign) and s.value is not None}
+    args = node.args
+    positional = [*args.posonlyargs, *args.args]
+    return {**dict(zip([a.arg for a in positional[len(positional) - len(args.defaults):]],
+                       args.defaults, strict=True)),
+            **{a.arg: d for a, d in zip(args.kwonlyargs, args.kw_defaults, strict=True) if d}}
+
+
+def reads_the_yaml(expr: ast.expr) -> bool:
+    """The expression calls ``yaml_value`` (``field(default=yaml_value(...))`` included)."""
+    return any(isinstance(n, ast.Call) and isinstance(n.func, ast.Name)
+               and n.func.id == "yaml_value" for n in ast.walk(expr))
+
+
+#: Everything whose defaults stand for yaml keys ...
+READ = (StochasticSpec, StoredRunSpec, LiveDNSSpec, StochasticFlow.__init__, DNSParams, DNSRun,
+        EnvParams, SwimmerEnv.__init__, TaskSpec, RewardSpec, Runtime, Runtime.from_names,
+        EvalSizes, CompareConfig, strategy_variants, make_mlp, tanh_normal_actor, value_critic)
+#: ... but these, written in Python: library-only keywords (no config sets them), torch
+#: dtypes (the yaml's ``dtype`` is a name), and EnvParams's task and reward (``TaskSpec()``,
+#: ``RewardSpec()``, whose own defaults are read).
+WRITTEN = {
+    "StochasticFlow.__init__": ("dtype", "generator"),
+    "SwimmerEnv.__init__": ("generator", "ic_blocks"),
+    "EnvParams": ("task", "reward"),
+    "make_mlp": ("out_gain", "device", "dtype"),
+    "tanh_normal_actor": ("device", "dtype"),
+    "value_critic": ("device", "dtype"),
+}
+
+
+@pytest.mark.parametrize("obj", READ, ids=lambda o: o.__qualname__)
+def test_defaults_are_read_from_the_yaml_not_written(obj):
+    written = written_defaults(obj)
+    allowed = WRITTEN.get(obj.__qualname__, ())
+    literal = sorted(name for name in defaults(obj)
+                     if name not in allowed and not reads_the_yaml(written[name]))
+    assert literal == [], f"{obj.__qualname__}: defaults not read by yaml_value: {literal}"
+
+
+def test_yaml_value_reads_one_file_as_hydra_does():
+    """Numbers as Hydra parses them (``1.0e-4``: a float), lists as tuples, interpolations
+    unresolved, a missing key named."""
+    nu = yaml_value("solver/dns", "dns.nu")
+    assert type(nu) is float and nu == _compose("dns").dns.nu
+    assert type(yaml_value("solver/dns", "dns.n")) is int
+    assert yaml_value("signals/all", "names") == tuple(_compose("evaluate").signals.names)
+    assert yaml_value("dns", "store.path") == "data/dns/dns_n${dns.n}_seed${seed}.zarr"
+    with pytest.raises(KeyError, match="conf/evaluate.yaml has no key 'eval.absent'"):
+        yaml_value("evaluate", "eval.absent")
 
 
 def test_every_typed_config_of_swimrl_config_is_covered():
@@ -150,7 +208,7 @@ def test_swimmer_episode_signals_and_runtime(name):
     for runtime in (Runtime, Runtime.from_names):
         assert "threads" not in defaults(runtime)
         assert_defaults_are_the_yaml(runtime, cfg)
-    assert_defaults_are_the_yaml(SwimmerEnv, cfg, library_only=("generator", "ic_blocks"))
+    assert_defaults_are_the_yaml(SwimmerEnv.__init__, cfg, library_only=("generator", "ic_blocks"))
 
 
 @pytest.mark.parametrize("name", EVALUATING)

@@ -11,8 +11,8 @@ import pytest
 import torch
 from hydra import compose, initialize_config_module
 
-from swimrl.analysis.figures import dns as dfig
-from swimrl.config import figures_config
+from swimrl.paper import dns as dfig
+from swimrl.paper.config import figures_config
 from swimrl.policies.baselines import StrategyLabel
 
 torch.set_num_threads(1)
@@ -115,9 +115,9 @@ def test_figure_draws_every_panel_from_tiny_records(tmp_path):
 def test_replay_record_is_made_once_from_the_store_and_read_after(tmp_path):
     """dns_record on a tiny stored run: made from the store, written, then read (also with
     the store gone); box units; R_hat = final distance / v_s T; videos 5 and 10 draw it."""
-    from swimrl.analysis.figures.videos import video_cloud, video_trajectories
     from swimrl.config import dns_run
     from swimrl.flows.dns.run import run_dns
+    from swimrl.paper.videos import video_cloud, video_trajectories
 
     store = tmp_path / "run.zarr"
     with initialize_config_module("swimrl.conf", version_base="1.3"):

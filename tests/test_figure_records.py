@@ -1,4 +1,4 @@
-"""Figure records (swimrl.analysis.figures.records): a missing record is computed and written,
+"""Figure records (swimrl.paper.records): a missing record is computed and written,
 read back equal; a record made for other sizes, seeds or policy files, of another format, or
 with mixed sizes inside it is refused in one line; ``figures.refresh`` remakes it. Tiny
 evaluations (64^2 grid, T = 1, a few swimmers)."""
@@ -13,9 +13,9 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from swimrl.analysis.figures import mechanism, records, robustness
-from swimrl.config import figures_config
 from swimrl.errors import BadFileError, ConfigError
+from swimrl.paper import mechanism, records, robustness
+from swimrl.paper.config import figures_config
 from swimrl.runs.policy_files import PRETRAINED_ROOT
 
 TINY = ["progress=false", "threads=1", "episode.duration=1.0", "flow.n_grid=64",
@@ -184,7 +184,7 @@ def test_every_record_at_tiny_sizes_and_no_input_under_shipped_before(tiny, monk
     transfer (c) with the ratio to the three DNS-trained runs and their curves (f) from the
     committed records (its replay record was made at the full sizes, so at these it is
     refused and (a) is pending)."""
-    from swimrl.analysis.figures.build import build_figures
+    from swimrl.paper.build import build_figures
 
     monkeypatch.chdir(REPO)  # the comparisons name their policies from the repository root
     for name in ("ku0.1", "ku1"):
@@ -212,7 +212,7 @@ def test_every_record_at_tiny_sizes_and_no_input_under_shipped_before(tiny, monk
     assert perf["derived"]["protocol"]["ku10"]["n_flows"] == 100
     pattern = json.loads((cfg.records / "ku_pattern.json").read_text())
     assert set(pattern["derived"]["ku10"]["map_correlation"]) == {"n_theta", "omega"}
-    from swimrl.analysis.figures.dns import shipped_before_inputs
+    from swimrl.paper.dns import shipped_before_inputs
 
     assert shipped_before_inputs(cfg.dns) == []
     dns = build_figures(replace(cfg, only="dnsFlow"), log=lambda _: None)["dnsFlow"]

@@ -1,4 +1,4 @@
-"""Figures (swimrl.analysis.figures): policy-map binning, the S_nn statistic, each figure on a
+"""Figures (swimrl.paper): policy-map binning, the S_nn statistic, each figure on a
 tiny record, the cached evaluation records, and the builders' names."""
 
 from __future__ import annotations
@@ -12,12 +12,12 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from swimrl.analysis.figures import ablation, mechanism, records, robustness, stochastic, training
-from swimrl.analysis.figures.build import BUILDERS
 from swimrl.analysis.performance import load, summarise
 from swimrl.analysis.policy_maps import binned_mean, snn_extremes
 from swimrl.analysis.training_curves import PAPER_EPISODE_FRAMES
-from swimrl.config import figures_config
+from swimrl.paper import ablation, mechanism, records, robustness, stochastic, training
+from swimrl.paper.build import BUILDERS
+from swimrl.paper.config import figures_config
 
 RESULTS = Path(__file__).parent.parent / "docs" / "results" / "smart_ku_sweep"
 RNG = np.random.default_rng(1)
@@ -137,7 +137,7 @@ def test_ku_record_is_cached_and_consistent(compose_cfg, tmp_path):
 
 
 def test_videos_on_a_tiny_record(tmp_path):
-    from swimrl.analysis.figures.videos import video_cloud, video_trajectories
+    from swimrl.paper.videos import video_cloud, video_trajectories
 
     steps = RNG.normal(0, 0.2, (3, 4, 3, 2))
     rec = {"cloud": np.cumsum(steps, axis=2), "traj_abs": 5 + np.cumsum(steps, axis=2),

@@ -6,43 +6,49 @@ from __future__ import annotations
 import os
 
 import pytest
+from omegaconf import OmegaConf
 
-from swimrl.flows.labels import (
-    flow_display,
-    flow_tag,
-    ku_display,
-    ku_name,
-    ku_number,
-    kubo_label,
-    parse_ku_name,
-    parse_kubo,
-)
+import swimrl.config  # noqa: F401  (registers the ${flow_tag:...} and ${ku:...} resolvers)
+from swimrl.flows.labels import ku_display, ku_name, ku_number, parse_ku_name
 from swimrl.policies.baselines import StrategyLabel
 from swimrl.runs.atomic import atomic_write, atomic_write_text, temp_path
 
 
-@pytest.mark.parametrize(("kubo", "label", "name", "shown"), [
-    (0.1, "0.1", "ku0.1", "Ku = 0.1"), (1.0, "1", "ku1", "Ku = 1"), (10, "10", "ku10", "Ku = 10"),
-    (1e7, "1e7", "ku1e7", "Ku = 1e+07"), (1e-5, "1e-05", "ku1e-05", "Ku = 1e-05"),
-    (2.5e12, "2.5e12", "ku2.5e12", "Ku = 2.5e+12")])
-def test_ku_labels_and_their_parser(kubo, label, name, shown):
-    assert (kubo_label(kubo), ku_name(kubo), ku_display(kubo)) == (label, name, shown)
+@pytest.mark.parametrize(("kubo", "name", "shown"), [
+    (0.1, "ku0.1", "Ku = 0.1"), (1.0, "ku1", "Ku = 1"), (10, "ku10", "Ku = 10"),
+    (1e7, "ku1e7", "Ku = 1e+07"), (1e-5, "ku1e-5", "Ku = 1e-05"),
+    (2.5e12, "ku2.5e12", "Ku = 2.5e+12")])
+def test_ku_labels_and_their_parser(kubo, name, shown):
+    assert (ku_name(kubo), ku_display(kubo)) == (name, shown)
+    assert ku_name({"name": "stochastic", "kubo": kubo}) == name
     assert ku_number(kubo) == f"{kubo:g}" and ku_display(kubo, "=") == f"Ku={kubo:g}"
-    for text in (label, name, shown, ku_number(kubo), name.upper(), flow_tag("stochastic", kubo)):
-        assert parse_kubo(text) == pytest.approx(kubo), text
-    assert parse_ku_name(name) == pytest.approx(kubo) and parse_ku_name(label) is None
+    # the one parser reads the label back, and every older form of it
+    for text in (name, name.upper(), f"ku{kubo:g}", f"ku{float(kubo)}", f"ku{kubo!r}"):
+        assert parse_ku_name(text) == pytest.approx(kubo), text
+    assert ku_name(parse_ku_name(name)) == name
 
 
 def test_ku_label_edges():
-    assert flow_tag("stochastic", 10.0) == "ku10.0" and flow_tag("stochastic", 10) == "ku10"
-    assert flow_tag("stochastic", 1e7) == "ku10000000.0" and flow_tag("dns") == "dns"
-    assert flow_display({"name": "stochastic", "kubo": 1e7}, "=") == "Ku=1e+07"
-    assert flow_display({"name": "dns"}) == "dns" and flow_display("stored") == "stored"
-    assert flow_display(0.1) == "Ku = 0.1"
-    for text in ("ku1e+07", "1e+07", "10000000", "ku10000000", "ku1E7"):
-        assert parse_kubo(text) == 1e7
-    for text in ("ku10_seed0", "dns", "ku", "kuinf", "ku-1", "ku1_0", "policy(ku10)"):
-        assert parse_kubo(text) is None and parse_ku_name(text) is None
+    assert ku_name({"name": "dns"}) == "dns" and ku_name("dns_replay") == "dns_replay"
+    assert ku_display({"name": "stochastic", "kubo": 1e7}, "=") == "Ku=1e+07"
+    assert ku_display({"name": "dns"}) == "dns" and ku_display("stored") == "stored"
+    assert ku_display(0.1) == "Ku = 0.1"
+    for text in ("ku1e7", "ku1e+07", "ku10000000", "ku10000000.0", "ku1E7", "KU1e7"):
+        assert parse_ku_name(text) == 1e7
+    assert parse_ku_name("ku10.0") == 10 and parse_ku_name("ku.5") == 0.5
+    for text in ("ku10_seed0", "dns", "ku", "kuinf", "ku-1", "ku1_0", "policy(ku10)", "10",
+                 "1e7", "Ku = 10"):
+        assert parse_ku_name(text) is None, text
+
+
+@pytest.mark.parametrize(("kubo", "name"), [(0.1, "ku0.1"), (1, "ku1"), (10.0, "ku10"),
+                                            (1e7, "ku1e7"), ("1e7", "ku1e7")])
+def test_ku_resolvers_of_the_configs(kubo, name):
+    """``${flow_tag:${flow}}`` (run directories) and ``ku${ku:${flow.kubo}}`` give the label."""
+    cfg = OmegaConf.create({"flow": {"name": "stochastic", "kubo": kubo},
+                            "dir": "x_${flow_tag:${flow}}_seed0", "policy": "ku${ku:${flow.kubo}}",
+                            "dns": {"name": "dns_replay"}, "other": "${flow_tag:${dns}}"})
+    assert (cfg.dir, cfg.policy, cfg.other) == (f"x_{name}_seed0", name, "dns_replay")
 
 
 def test_strategy_label_round_trip():

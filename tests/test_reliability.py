@@ -47,7 +47,7 @@ def test_probe_cases_are_one_line_exit_2_and_leave_nothing(tmp_path):
         (COMPARE, [*SMALL, f"hydra.run.dir={tmp_path}/file/run"], "hydra.run.dir="),
         (EVAL, [*SMALL, *HUGE_EVAL, f"hydra.run.dir={run}0"], "eval.flows_per_batch"),
         (COMPARE, [*SMALL, *HUGE_EVAL, f"hydra.run.dir={run}1"], "eval.flows_per_batch"),
-        (TRAIN, [*TINY, "train.n_flows=100000000", "train.frames_per_batch=4000000000",
+        (TRAIN, [*TINY, "train.n_flows=100000000", "train.rollout_length=40",
                  "train.total_frames=4000000000", f"hydra.run.dir={run}2"], "train.n_flows"),
         (EVAL, [*SMALL, "strategy=policy", f"policy={tmp_path}/nanpolicy",
                 f"hydra.run.dir={run}3"], f"{tmp_path}/nanpolicy"),

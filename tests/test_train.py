@@ -30,7 +30,7 @@ TINY = SMALL + [
     "train.compile=false",
     "train.n_flows=2",
     "train.n_swimmers=4",
-    "train.frames_per_batch=80",
+    "train.rollout_length=10",
     "train.total_frames=320",
     "train.minibatch_size=40",
     "train.eval_every=2",
@@ -130,15 +130,16 @@ def test_validation_precedes_compute(train_cfg, tmp_path, monkeypatch):
         raise AssertionError("flow built before validation")
 
     monkeypatch.setattr(swimrl.env, "build_flow", boom)
-    with pytest.raises(ValueError, match="train.frames_per_batch"):
-        train(train_cfg("train.frames_per_batch=81"), tmp_path)
+    with pytest.raises(ValueError, match="train.rollout_length"):
+        train(train_cfg("train.rollout_length=0"), tmp_path)
     assert not (tmp_path / "tb").exists()
 
 
 @pytest.mark.parametrize(
     ("override", "key"),
     [
-        ("train.frames_per_batch=81", "train.frames_per_batch"),
+        ("train.rollout_length=0", "train.rollout_length"),
+        ("train.rollout_length=2.5", "train.rollout_length"),
         ("train.total_frames=40", "train.total_frames"),
         ("train.minibatch_size=100", "train.minibatch_size"),
         ("train.minibatches_per_epoch=3", "train.minibatches_per_epoch"),
@@ -383,7 +384,7 @@ def test_bigbatch_preset_extends_default():
         big = compose("train", overrides=["train_preset=bigbatch", "train.total_frames=1e7"])
     assert (big.train.n_flows, big.train.n_swimmers) == (64, 8)
     assert (big.optim.anneal, default.optim.anneal) == ("linear", "none")
-    assert big.train.frames_per_batch == 64 * 8 * 100 and big.train.minibatch_size == 2560
+    assert big.train.rollout_length == 100 and big.train.minibatch_size == 2560
     for key in ("optim.lr_actor", "optim.lr_critic", "loss.entropy_coeff", "loss.gae_lambda"):
         sect, k = key.split(".")
         assert big[sect][k] == default[sect][k], key
@@ -453,7 +454,10 @@ def test_resume_a_checkpoint_written_before_the_key_renames(compose_cfg, tmp_pat
     data = Path(__file__).parent / "data" / "legacy_checkpoint"
     expected = json.loads((data / "expected.json").read_text())
     assert load_file(data / "last.pt")["config"]["episode"]["shape_factor_max"] == 0.95
+    # the keys renamed since: episode.shape_factor_max, and train.frames_per_batch = F S L
+    # stated as train.rollout_length = L (2 flows x 4 swimmers x 10 decisions)
     overrides = [o.replace("episode.shape_factor_max", "swimmer.shape_factor_max")
+                 .replace("train.frames_per_batch=80", "train.rollout_length=10")
                  for o in expected["overrides"]]
     overrides += ["optim.anneal=linear", "train.compile=false"]  # that code's defaults
     RunLayout(tmp_path).checkpoint.parent.mkdir(parents=True)
@@ -654,11 +658,12 @@ def test_parallel_preset_is_long_floor05_with_the_swimmer_parallel_layout():
     plan = make_plan(c)
     assert c.train.n_flows * c.train.n_swimmers == 4096 and plan.rollout_steps == 16
     assert plan.gradient_steps_per_update == 32 and c.train.epochs == 4
-    assert par.optim.lr_actor == pytest.approx(3e-3 * math.sqrt(8192 / 2560), rel=0.01)
-    assert par.optim.lr_critic == pytest.approx(1e-3 * math.sqrt(8192 / 2560), rel=0.01)
-    for key in ("n_flows", "n_swimmers", "frames_per_batch", "minibatch_size", "eval_every"):
+    assert (plan.lr_actor, plan.lr_critic) == pytest.approx(
+        (3e-3 * math.sqrt(8192 / 2560), 1e-3 * math.sqrt(8192 / 2560)), rel=1e-12)
+    assert plan.frames_per_batch == 64 * 64 * 16 == c.train.frames_per_batch
+    for key in ("n_flows", "n_swimmers", "rollout_length", "minibatch_size", "eval_every"):
         par.train[key] = ref.train[key]
-    par.optim.lr_actor, par.optim.lr_critic = ref.optim.lr_actor, ref.optim.lr_critic
+    par.optim.lr_scale = ref.optim.lr_scale
     assert par == ref
 
 
@@ -683,3 +688,28 @@ def test_parallel_layout_two_updates_then_resume(compose_cfg, tmp_path):
     assert m["training"]["updates"] == 2 and m["training"]["frames"] == 131072
     curve = scalars(tmp_path)["eval/R_hat"]
     assert [step for step, _ in curve] == [0, 65536, 131072]
+
+
+def test_a_checkpoint_config_from_before_rollout_length_upgrades_to_the_same_batch():
+    """A stored config with ``train.frames_per_batch`` (the input before
+    ``train.rollout_length``) and without ``optim.lr_scale`` upgrades to today's keys with the
+    same batch and the rates as they were given; composing it again gives the same plan."""
+    from hydra import compose, initialize_config_module
+    from omegaconf import OmegaConf
+
+    from swimrl.runs.checkpoint import upgrade_config
+
+    with initialize_config_module("swimrl.conf", version_base="1.3"):
+        now = OmegaConf.to_container(compose("train", overrides=["train_preset=parallel"]),
+                                     resolve=True)
+    old = copy.deepcopy(now)
+    old["train"]["frames_per_batch"] = old["train"].pop("rollout_length") * 64 * 64
+    old["optim"] = {k: v for k, v in old["optim"].items()
+                    if k not in ("lr_scale", "lr_reference_minibatch")}
+    old["optim"].update(lr_actor=5.4e-3, lr_critic=1.8e-3)
+    new = upgrade_config(old)
+    assert new["train"] == now["train"]
+    assert (new["optim"]["lr_scale"], new["optim"]["lr_actor"]) == ("none", 5.4e-3)
+    plan = make_plan(train_config(OmegaConf.create(new)))
+    assert (plan.frames_per_batch, plan.rollout_steps) == (65536, 16)
+    assert (plan.lr_actor, plan.lr_critic) == (5.4e-3, 1.8e-3)

@@ -9,7 +9,7 @@ Each curve is one column of a run's ``curves.csv`` (``frames`` and one column pe
 TensorBoard tag; empty cells where a tag was not logged) against frames; the periodic
 held-out evaluation ``eval/R_hat`` is drawn with its SEM band when ``eval/R_hat_sem`` is
 there. :func:`draw_curve` draws one curve, here and in Fig. trainingCurves
-(:mod:`swimrl.analysis.figures.training`).
+(:mod:`swimrl.paper.training`).
 """
 
 from __future__ import annotations

@@ -1,4 +1,4 @@
-r"""``swimrl-figures``: the paper's figures into ``docs/figures/`` (:mod:`swimrl.analysis.figures`).
+r"""``swimrl-figures``: the paper's figures into ``docs/figures/`` (:mod:`swimrl.paper`).
 
     swimrl-figures                         # all, from the records in docs/results/figures/
     swimrl-figures only=kuInf              # one figure
@@ -16,10 +16,10 @@ from pathlib import Path
 
 from omegaconf import DictConfig
 
-from swimrl.analysis.figures.build import build_figures
-from swimrl.analysis.figures.records import FiguresConfig
 from swimrl.cli import command
-from swimrl.config import figures_config
+from swimrl.paper.build import build_figures
+from swimrl.paper.config import figures_config
+from swimrl.paper.records import FiguresConfig
 
 
 def check(cfg: DictConfig, out: Path | None) -> FiguresConfig:

@@ -28,6 +28,7 @@ from pathlib import Path
 import numpy as np
 import torch
 
+from swimrl.conf_values import yaml_value
 from swimrl.errors import BadFileError, ConfigError, as_bool
 from swimrl.policies.baselines import STRATEGIES, StrategyLabel, StrategySpec
 from swimrl.runs.jobs import EvaluationInterruptedError, Preemption
@@ -60,7 +61,8 @@ class Variant:
 @dataclass(frozen=True)
 class CompareConfig:
     """``swimrl-compare``: the variants, evaluated on ``setup`` (shared flows or one by one).
-    The defaults are ``conf/compare.yaml``'s (``tests/test_config_sources.py``).
+    The defaults are read from ``conf/compare.yaml`` (``overwrite``: ``conf/evaluate.yaml``;
+    :mod:`swimrl.conf_values`).
 
     Parameters
     ----------
@@ -78,9 +80,9 @@ class CompareConfig:
 
     setup: RunSpec
     variants: tuple[Variant, ...]
-    shared_flows: bool = False
-    overwrite: bool = False
-    resume: bool = False
+    shared_flows: bool = yaml_value("compare", "compare.shared_flows")
+    overwrite: bool = yaml_value("evaluate", "overwrite")
+    resume: bool = yaml_value("compare", "compare.resume")
 
     def __post_init__(self) -> None:
         for v in self.variants:
@@ -92,12 +94,14 @@ class CompareConfig:
 
 def strategy_variants(
     strategies: Sequence[str],
-    naive_shape_factors: Sequence[float] = (0.98,),
-    minimal: Sequence[float] = (1.0, 0.0, 0.0, 0.0),
-    policies: Sequence[str] = (),
-    minimal_fits: Sequence[tuple[str, Sequence[float]]] = (),
+    naive_shape_factors: Sequence[float] = yaml_value("compare", "compare.naive_shape_factors"),
+    minimal: Sequence[float] = tuple(yaml_value("compare", f"compare.minimal.c{i}")
+                                     for i in (1, 2, 3, 4)),
+    policies: Sequence[str] = yaml_value("compare", "compare.policies"),
+    minimal_fits: Sequence[tuple[str, Sequence[float]]] = yaml_value(
+        "compare", "compare.minimal_fits"),
 ) -> tuple[Variant, ...]:
-    """Variants of ``compare.strategies`` (the keyword defaults: ``conf/compare.yaml``'s):
+    """Variants of ``compare.strategies`` (the keyword defaults: read from ``conf/compare.yaml``):
     ``naive`` expands over ``naive_shape_factors``, ``minimal`` takes the ``minimal``
     coefficients c1..c4, or expands over the labelled ``minimal_fits`` where given, and
     ``policy`` expands over ``policies`` (run dirs, checkpoints, ``pretrained/NAME``)."""

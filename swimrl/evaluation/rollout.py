@@ -226,11 +226,11 @@ def evaluate_shared(setup: RunSpec, actors: Sequence[Actor], desc: str = "eval",
         r_hat = run_episodes(env, router, bar, on_decision=recorder,
                              preemption=preemption).double()
         env.check_displacement()
+        outcomes = env.outcomes()
         if recorder is not None:
             recorder.finish(r_hat)
         chunk_s = time.perf_counter() - t0
         result = [r_hat[:, j * s:(j + 1) * s].mean(dim=1).cpu().tolist() for j in range(k)]
-        outcomes = env.outcomes()
         per_actor = [chunk_outcomes(outcomes, slice(j * s, (j + 1) * s), params.update_interval)
                      for j in range(k)]
         results.append({"chunk": c, "per_flow": result, "flow_stats": env.flow.measured_stats(),

@@ -14,6 +14,7 @@ from pathlib import Path
 
 import torch
 
+from swimrl.conf_values import yaml_value
 from swimrl.errors import (
     as_bool,
     as_float,
@@ -45,7 +46,7 @@ class StochasticSpec:
 
     ``basis``, ``basis_seed``, ``amplitudes``, ``velocity_scale``: readings of the paper's
     text, defaults as written (:mod:`swimrl.flows.stochastic`). The defaults (for library
-    calls) are ``conf/flow/stochastic.yaml``'s values (``tests/test_config_sources.py``).
+    calls) are read from ``conf/flow/stochastic.yaml`` (:mod:`swimrl.conf_values`).
 
     Parameters
     ----------
@@ -70,14 +71,14 @@ class StochasticSpec:
     """
 
     kubo: float
-    n_modes: int = 5
-    n_grid: int = 400
-    spacing: float = 0.025
-    basis: str = "redrawn"
-    basis_seed: int = 0
-    amplitudes: str = "stationary"
-    velocity_scale: str = "total"
-    name: str = "stochastic"
+    n_modes: int = yaml_value("flow/stochastic", "n_modes")
+    n_grid: int = yaml_value("flow/stochastic", "n_grid")
+    spacing: float = yaml_value("flow/stochastic", "spacing")
+    basis: str = yaml_value("flow/stochastic", "basis")
+    basis_seed: int = yaml_value("flow/stochastic", "basis_seed")
+    amplitudes: str = yaml_value("flow/stochastic", "amplitudes")
+    velocity_scale: str = yaml_value("flow/stochastic", "velocity_scale")
+    name: str = yaml_value("flow/stochastic", "name")
 
     def __post_init__(self) -> None:
         as_float("flow.kubo", self.kubo, lambda v: v > 0, "> 0 (e.g. 0.1, 1, 10, 1e7)")
@@ -97,7 +98,7 @@ class StoredRunSpec:
     """``flow=dns_replay``: runs stored by ``swimrl-dns`` at ``paths`` (one or several
     independent realisations), decoded on ``decode_n`` nodes per side (None: the run's
     grid), ``flows_per_start`` flows sharing each drawn (run, start time). The defaults are
-    ``conf/flow/dns_replay.yaml``'s (``tests/test_config_sources.py``).
+    read from ``conf/flow/dns_replay.yaml`` (:mod:`swimrl.conf_values`).
 
     Parameters
     ----------
@@ -114,10 +115,10 @@ class StoredRunSpec:
     """
 
     paths: tuple[Path, ...]
-    allow_incomplete: bool = False
-    decode_n: int | None = None
-    flows_per_start: int = 1
-    name: str = "dns_replay"
+    allow_incomplete: bool = yaml_value("flow/dns_replay", "allow_incomplete")
+    decode_n: int | None = yaml_value("flow/dns_replay", "decode_n")
+    flows_per_start: int = yaml_value("flow/dns_replay", "flows_per_start")
+    name: str = yaml_value("flow/dns_replay", "name")
 
     def __post_init__(self) -> None:
         as_bool("flow.allow_incomplete", self.allow_incomplete)
@@ -164,7 +165,7 @@ class LiveDNSSpec:
     spinup_time: float
     measure_time: float
     interval_tau_k: float
-    name: str = "dns"
+    name: str = yaml_value("flow/dns", "name")
 
     def __post_init__(self) -> None:
         for key in ("spinup_time", "interval_tau_k"):

@@ -71,6 +71,7 @@ import math
 
 import torch
 
+from swimrl.conf_values import yaml_value
 from swimrl.flows.base import GriddedFlow
 from swimrl.flows.grid import PeriodicGrid
 
@@ -131,6 +132,25 @@ def band_limit(grid: PeriodicGrid, ell: float, tol: float = 1e-13) -> int | None
         if k_drop * ell >= 2 and weight(k_drop**2) <= tol * peak:
             return k_keep
     return None
+
+
+class OUCoefficients:
+    """The ``M`` Ornstein-Uhlenbeck coefficients ``c_i(t)`` of a flow, ``(n_flows, M)`` in
+    ``self.coeffs``, correlation time ``self.tau_f``, stationary variance ``1/M``: the time
+    dependence shared by the 2D (:class:`StochasticFlow`) and 3D
+    (:class:`~swimrl.flows.stochastic3d.StochasticFlow3D`) stochastic flows."""
+
+    def ou_factors(self, dt: float) -> tuple[float, float]:
+        """``(e^{-dt/tau_f}, sqrt((1 - e^{-2 dt/tau_f}) / M))`` computed in double precision."""
+        decay = math.exp(-dt / self.tau_f)
+        return decay, math.sqrt(-math.expm1(-2 * dt / self.tau_f) / self.n_basis)
+
+    def advance(self, dt: float) -> None:
+        """Exact OU step of all coefficients: ``c <- c e^{-dt/tau_f} + sigma_dt xi``."""
+        decay, sigma = self.ou_factors(dt)
+        noise = self._randn(self.n_flows, self.n_basis)
+        self.coeffs.mul_(decay).add_(noise, alpha=sigma)
+        self.time += dt
 
 
 class BandLimitedSynthesis:
@@ -196,14 +216,15 @@ class BandLimitedSynthesis:
         return out
 
 
-class StochasticFlow(GriddedFlow):
+class StochasticFlow(OUCoefficients, GriddedFlow):
     """``n_flows`` independent realisations of the stochastic flow at Kubo number ``kubo``.
 
     Each realisation has its own ``M`` components ``psi_i`` and coefficients ``c_i``;
     :meth:`reset` redraws both for the selected flows (with ``basis="fixed"``: only the
     ``c_i``, every realisation sharing one set of ``psi_i``). ``amplitudes`` and
     ``velocity_scale``: see the module docstring. The keyword defaults (for library calls)
-    are ``conf/flow/stochastic.yaml``'s values (``tests/test_config_sources.py``).
+    are read from ``conf/flow/stochastic.yaml`` (``device``: ``conf/evaluate.yaml``;
+    :mod:`swimrl.conf_values`).
     """
 
     u_rms = 1.0
@@ -214,16 +235,16 @@ class StochasticFlow(GriddedFlow):
         self,
         n_flows: int,
         kubo: float,
-        n_modes: int = 5,
-        n_grid: int = 400,
-        spacing: float = 0.025,
-        device: torch.device | str = "cpu",
+        n_modes: int = yaml_value("flow/stochastic", "n_modes"),
+        n_grid: int = yaml_value("flow/stochastic", "n_grid"),
+        spacing: float = yaml_value("flow/stochastic", "spacing"),
+        device: torch.device | str = yaml_value("evaluate", "device"),
         dtype: torch.dtype = torch.float32,
         generator: torch.Generator | None = None,
-        basis: str = "redrawn",
-        basis_seed: int = 0,
-        amplitudes: str = "stationary",
-        velocity_scale: str = "total",
+        basis: str = yaml_value("flow/stochastic", "basis"),
+        basis_seed: int = yaml_value("flow/stochastic", "basis_seed"),
+        amplitudes: str = yaml_value("flow/stochastic", "amplitudes"),
+        velocity_scale: str = yaml_value("flow/stochastic", "velocity_scale"),
     ):
         for name, value, allowed in (("basis", basis, BASIS_MODES),
                                      ("amplitudes", amplitudes, AMPLITUDE_MODES),
@@ -298,14 +319,3 @@ class StochasticFlow(GriddedFlow):
             self.coeffs[idx] = (xi / xi.norm(dim=1, keepdim=True)).to(self.dtype)
         self.time[idx] = 0.0
 
-    def ou_factors(self, dt: float) -> tuple[float, float]:
-        """``(e^{-dt/tau_f}, sqrt((1 - e^{-2 dt/tau_f}) / M))`` computed in double precision."""
-        decay = math.exp(-dt / self.tau_f)
-        return decay, math.sqrt(-math.expm1(-2 * dt / self.tau_f) / self.n_basis)
-
-    def advance(self, dt: float) -> None:
-        """Exact OU step of all coefficients: ``c <- c e^{-dt/tau_f} + sigma_dt xi``."""
-        decay, sigma = self.ou_factors(dt)
-        noise = self._randn(self.n_flows, self.n_basis)
-        self.coeffs.mul_(decay).add_(noise, alpha=sigma)
-        self.time += dt

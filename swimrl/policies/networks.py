@@ -29,6 +29,7 @@ from torch import nn
 from torchrl.data import Bounded, Composite
 from torchrl.modules import ProbabilisticActor, TanhNormal, ValueOperator
 
+from swimrl.conf_values import yaml_value
 from swimrl.errors import as_float, as_int, keep_number_types, one_of, require
 
 ACTIVATIONS = {"tanh": nn.Tanh, "relu": nn.ReLU, "elu": nn.ELU}
@@ -41,8 +42,8 @@ NO_STD_BOUND = 1e-4
 class ModelSpec:
     """Shape of actor and critic (``model.*``): hidden widths, activation, initial ``sigma``
     and its lower bound ``sigma_min``. (The keyword defaults of :func:`make_mlp`,
-    :func:`tanh_normal_actor` and :func:`value_critic` are ``conf/train.yaml``'s ``model.*``,
-    ``tests/test_config_sources.py``.)"""
+    :func:`tanh_normal_actor` and :func:`value_critic` are read from ``conf/train.yaml``'s
+    ``model.*``, :mod:`swimrl.conf_values`.)"""
 
     hidden: tuple[int, ...]
     activation: str
@@ -65,8 +66,8 @@ class ModelSpec:
 def make_mlp(
     n_in: int,
     n_out: int,
-    hidden: Sequence[int] = (64, 64),
-    activation: str = "tanh",
+    hidden: Sequence[int] = yaml_value("train", "model.hidden"),
+    activation: str = yaml_value("train", "model.activation"),
     out_gain: float = 1.0,
     device=None,
     dtype=torch.float32,
@@ -103,10 +104,10 @@ def action_bounds(spec) -> tuple[float, float]:
 def tanh_normal_actor(
     n_obs: int,
     spec: Bounded,
-    hidden: Sequence[int] = (64, 64),
-    activation: str = "tanh",
-    init_std: float = 1.0,
-    min_std: float = NO_STD_BOUND,
+    hidden: Sequence[int] = yaml_value("train", "model.hidden"),
+    activation: str = yaml_value("train", "model.activation"),
+    init_std: float = yaml_value("train", "model.init_std"),
+    min_std: float = yaml_value("train", "model.min_std"),
     device=None,
     dtype=torch.float32,
 ) -> ProbabilisticActor:
@@ -150,8 +151,8 @@ def policy_std(actor: ProbabilisticActor) -> torch.Tensor:
 
 def value_critic(
     n_obs: int,
-    hidden: Sequence[int] = (64, 64),
-    activation: str = "tanh",
+    hidden: Sequence[int] = yaml_value("train", "model.hidden"),
+    activation: str = yaml_value("train", "model.activation"),
     device=None,
     dtype=torch.float32,
 ) -> ValueOperator:
@@ -187,3 +188,15 @@ def deterministic_actor(actor: ProbabilisticActor) -> TensorDictModule:
         in_keys=["observation"],
         out_keys=["action"],
     )
+
+
+def actor_critic(model: ModelSpec, n_obs: int, spec: Bounded, device=None,
+                 dtype=torch.float32) -> tuple[ProbabilisticActor, ValueOperator]:
+    """The actor (:func:`tanh_normal_actor`) and critic (:func:`value_critic`) of one agent,
+    shaped by ``model`` (``model.*``), on ``n_obs`` signals, the actor bounded by ``spec``."""
+    actor = tanh_normal_actor(n_obs, spec, hidden=list(model.hidden),
+                              activation=model.activation, init_std=model.init_std,
+                              min_std=model.min_std, device=device, dtype=dtype)
+    critic = value_critic(n_obs, hidden=list(model.hidden), activation=model.activation,
+                          device=device, dtype=dtype)
+    return actor, critic

@@ -1,7 +1,7 @@
 r"""Small builders of the PPO pipeline, in the style of TorchRL's ``sota-implementations/ppo``.
 
-``make_env`` -> ``make_actor``/``make_critic`` -> ``make_collector`` -> ``make_loss``
-(``ClipPPOLoss`` + ``GAE``) -> ``make_optimizers``/``make_schedulers`` -> ``make_logger``.
+``make_env`` -> ``make_agent`` (actor and critic, ``GAE`` + ``ClipPPOLoss``, Adam and its
+schedules) -> ``make_collector`` -> ``make_logger``.
 Each takes the typed part of the config it needs (``cfg.model``, ``cfg.loss``, ``cfg.optim``,
 ``cfg.train``, the runtime), whose constructor has checked the values and their types.
 
@@ -17,18 +17,21 @@ scaled.
 
 from __future__ import annotations
 
+from typing import NamedTuple
+
 import torch
 from torch.optim.lr_scheduler import LambdaLR
 from torchrl.collectors import Collector
 from torchrl.envs import EnvBase, RewardScaling, TransformedEnv
+from torchrl.modules import ProbabilisticActor, ValueOperator
 from torchrl.objectives import ClipPPOLoss
 from torchrl.objectives.value import GAE
 from torchrl.record.loggers.tensorboard import TensorboardLogger
 
 from swimrl.env import EnvParams, SwimmerEnv
 from swimrl.flows.build import FlowSpec
-from swimrl.policies.networks import ModelSpec, tanh_normal_actor, value_critic
-from swimrl.rl.plan import LossSettings, OptimSettings, TrainSettings
+from swimrl.policies.networks import ModelSpec, actor_critic
+from swimrl.rl.plan import LossSettings, TrainConfig, TrainPlan, TrainSettings
 from swimrl.runs.layout import RunLayout
 from swimrl.runtime import Runtime
 
@@ -49,8 +52,8 @@ def make_env(flow: FlowSpec, params: EnvParams, runtime: Runtime, train: TrainSe
     ``seed`` (the training stream, :func:`~swimrl.rl.plan.training_seed`), episodes staggered
     in ``train.stagger`` groups (:meth:`~swimrl.env.SwimmerEnv.stagger`), with the reward
     multiplied by ``train.reward_scale`` (None: :func:`auto_reward_scale` at ``loss.gamma``)."""
-    base = SwimmerEnv.build(flow, params, runtime, train.n_flows, train.n_swimmers, seed)
-    base.stagger(train.stagger)  # train.stagger groups of flows, episodes offset
+    base = SwimmerEnv.build(flow, params, runtime, train.n_flows, train.n_swimmers, seed,
+                            stagger=train.stagger)
     scale = train.reward_scale
     if scale is None:
         scale = auto_reward_scale(base, loss.gamma)
@@ -67,30 +70,11 @@ def reward_scale_of(env: TransformedEnv) -> float:
     return float(env.transform.scale)
 
 
-def make_actor(model: ModelSpec, env: EnvBase, runtime: Runtime):
-    """Actor on the env's observation, bounded by its action spec (the ``TanhNormal``'s
-    ``low``/``high``; see :func:`swimrl.policies.networks.tanh_normal_actor`)."""
-    return tanh_normal_actor(
-        env.observation_spec["observation"].shape[-1],
-        env.action_spec_unbatched,
-        hidden=list(model.hidden),
-        activation=model.activation,
-        init_std=model.init_std,
-        min_std=model.min_std,
-        device=runtime.device,
-        dtype=runtime.dtype,
-    )
-
-
-def make_critic(model: ModelSpec, env: EnvBase, runtime: Runtime):
-    """Critic ``V(observation)``."""
-    return value_critic(
-        env.observation_spec["observation"].shape[-1],
-        hidden=list(model.hidden),
-        activation=model.activation,
-        device=runtime.device,
-        dtype=runtime.dtype,
-    )
+def make_actor_critic(model: ModelSpec, env: EnvBase, runtime: Runtime):
+    """Actor and critic on the env's observation, the actor bounded by its action spec (the
+    ``TanhNormal``'s ``low``/``high``; :func:`swimrl.policies.networks.actor_critic`)."""
+    return actor_critic(model, env.observation_spec["observation"].shape[-1],
+                        env.action_spec_unbatched, device=runtime.device, dtype=runtime.dtype)
 
 
 def make_collector(env: EnvBase, actor, train: TrainSettings, total_frames: int,
@@ -136,18 +120,44 @@ class FiniteObservationGAE(GAE):
         return data
 
 
-def make_loss(loss: LossSettings, actor, critic, gae_chunk: int | None
-              ) -> tuple[ClipPPOLoss, GAE]:
-    r"""``ClipPPOLoss`` (paper ``J(w)``, clip ``epsilon``, entropy bonus) and ``GAE``
-    (``A_i = sum_k (gamma lambda)^k delta_{i+k}``, ``delta_i = r_i + gamma V(s_{i+1}) -
-    V(s_i)``, bootstrapped at truncation since ``terminated`` is never set), its critic
-    evaluated in chunks of ``gae_chunk`` samples (``train.gae_chunk``)."""
+class Agent(NamedTuple):
+    """What PPO trains and how: actor, critic, ``ClipPPOLoss`` and its ``GAE``, the two Adam
+    optimisers and their schedulers."""
+
+    actor: ProbabilisticActor
+    critic: ValueOperator
+    loss: ClipPPOLoss
+    gae: GAE
+    optimizers: tuple[torch.optim.Adam, torch.optim.Adam]
+    schedulers: list[LambdaLR]
+
+
+def make_agent(cfg: TrainConfig, plan: TrainPlan, env: EnvBase) -> Agent:
+    r"""The :class:`Agent` of a training run on ``env``, each piece under its comment.
+
+    * actor and critic: :func:`make_actor_critic` (``model.*``);
+    * ``GAE`` (``A_i = sum_k (gamma lambda)^k delta_{i+k}``, ``delta_i = r_i + gamma
+      V(s_{i+1}) - V(s_i)``, bootstrapped at truncation since ``terminated`` is never set;
+      :class:`FiniteObservationGAE`), its critic evaluated in chunks of ``train.gae_chunk``
+      samples, and ``ClipPPOLoss`` (paper ``J(w)``, clip ``epsilon``, entropy bonus);
+    * separate Adam optimisers at the plan's initial rates (paper: ``4e-4``, ``8e-5``;
+      :meth:`~swimrl.rl.plan.OptimSettings.rates_for`); under ``train.cudagraphs`` the rates
+      are tensors on the device and the steps capturable (as TorchRL's
+      ``sota-implementations/ppo``), so a captured step reads the scheduled rate;
+    * their schedulers: rate ``lr_0 (1 - u / n_updates)`` at update ``u``
+      (``optim.anneal=linear``, reaching ``lr_0 / n_updates`` at the last update) or constant
+      (``none``), stepped once per update.
+    """
+    rt, t, loss, optim = cfg.runtime, cfg.train, cfg.loss, cfg.optim
+    # actor and critic
+    actor, critic = make_actor_critic(cfg.model, env, rt)
+    # the advantage and the loss
     gae = FiniteObservationGAE(
         gamma=loss.gamma,
         lmbda=loss.gae_lambda,
         value_network=critic,
         average_gae=False,
-        value_chunk_size=gae_chunk,  # the same values, cache-sized critic calls
+        value_chunk_size=t.gae_chunk,  # the same values, cache-sized critic calls
     )
     ppo = ClipPPOLoss(
         actor,
@@ -159,29 +169,17 @@ def make_loss(loss: LossSettings, actor, critic, gae_chunk: int | None
         loss_critic_type=loss.loss_critic_type,
         normalize_advantage=loss.normalize_advantage,
     )
-    return ppo, gae
-
-
-def make_optimizers(optim: OptimSettings, actor, critic, device, cudagraphs: bool
-                    ) -> tuple[torch.optim.Adam, torch.optim.Adam]:
-    """Separate Adam optimisers (paper: ``4e-4`` actor, ``8e-5`` critic). Under
-    ``train.cudagraphs`` the learning rates are tensors on ``device`` and the steps capturable
-    (as TorchRL's ``sota-implementations/ppo``), so a captured step reads the scheduled rate."""
-    eps, lrs = optim.eps, (optim.lr_actor, optim.lr_critic)
-    if not cudagraphs:
-        return (torch.optim.Adam(actor.parameters(), lr=lrs[0], eps=eps),
-                torch.optim.Adam(critic.parameters(), lr=lrs[1], eps=eps))
-    return tuple(
-        torch.optim.Adam(net.parameters(), lr=torch.tensor(lr, device=device), eps=eps,
-                         capturable=True)
-        for net, lr in ((actor, lrs[0]), (critic, lrs[1]))
-    )
-
-
-def make_schedulers(optim: OptimSettings, optimizers, n_updates: int) -> list[LambdaLR]:
-    """Learning rate ``lr_0 (1 - u / n_updates)`` at update ``u`` (``optim.anneal=linear``,
-    reaching ``lr_0 / n_updates`` at the last update) or constant (``none``); stepped once
-    per update."""
+    # the optimisers
+    nets = ((actor, plan.lr_actor), (critic, plan.lr_critic))
+    if t.cudagraphs:
+        optimizers = tuple(torch.optim.Adam(net.parameters(), eps=optim.eps, capturable=True,
+                                            lr=torch.tensor(lr, device=rt.device))
+                           for net, lr in nets)
+    else:
+        optimizers = tuple(torch.optim.Adam(net.parameters(), lr=lr, eps=optim.eps)
+                           for net, lr in nets)
+    # their learning-rate schedules
+    n_updates = plan.n_updates
     if optim.anneal == "linear":
 
         def factor(u: int) -> float:
@@ -191,7 +189,8 @@ def make_schedulers(optim: OptimSettings, optimizers, n_updates: int) -> list[La
         def factor(u: int) -> float:
             return 1.0
 
-    return [LambdaLR(opt, factor) for opt in optimizers]
+    schedulers = [LambdaLR(opt, factor) for opt in optimizers]
+    return Agent(actor, critic, ppo, gae, optimizers, schedulers)
 
 
 def make_logger(run: RunLayout) -> TensorboardLogger:

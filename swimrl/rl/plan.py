@@ -4,13 +4,17 @@ from them: sizes, schedule and seeds, all checked before any compute.
 Counting (all in *env-batch elements*, i.e. swimmer decisions):
 
 * one environment step advances ``n_flows x n_swimmers`` swimmers by ``T_u``;
-* a batch (one PPO update) is ``frames_per_batch = n_flows n_swimmers L`` frames, i.e. a
-  rollout of ``L`` decisions of every swimmer (episodes run on across batches and are
-  truncated at ``N = T/T_u`` decisions, then restart with a new flow realisation);
+* a batch (one PPO update) is a rollout of ``L = rollout_length`` decisions of every swimmer
+  (the input), i.e. ``frames_per_batch = n_flows n_swimmers L`` frames (derived, printed at
+  the start of a run); episodes run on across batches and are truncated at ``N = T/T_u``
+  decisions, then restart with a new flow realisation;
 * ``n_updates = total_frames // frames_per_batch`` updates; each update makes ``epochs``
   passes, each over ``minibatches_per_epoch`` minibatches of ``minibatch_size`` frames
   drawn without replacement from the batch (default: a full pass, ``frames_per_batch //
   minibatch_size``);
+* the Adam rates are ``optim.lr_actor``, ``optim.lr_critic`` (``optim.lr_scale=none``) or
+  those rates stated for minibatches of ``optim.lr_reference_minibatch`` frames and scaled
+  by ``sqrt(minibatch_size / lr_reference_minibatch)`` (``optim.lr_scale=sqrt``);
 * an *episode* (paper) is one flow realisation with its ``n_swimmers`` swimmers for ``T``:
   ``episodes = frames / (n_swimmers N)``.
 
@@ -23,7 +27,8 @@ reported ``R_hat`` is measured on held-out flow realisations.
 
 from __future__ import annotations
 
-from dataclasses import dataclass, replace
+import math
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 
@@ -33,13 +38,14 @@ from swimrl.evaluation.rollout import SWIMMER_BYTES
 from swimrl.flows.build import FLOW_WORK_BYTES, FlowSpec, flow_table_bytes
 from swimrl.policies.networks import ModelSpec
 from swimrl.runs.spec import RunSpec
-from swimrl.runtime import Runtime, check_memory
+from swimrl.runtime import RUNTIME, Runtime, check_memory
 
 #: Offset added to ``seed`` for the held-out evaluation flows.
 EVAL_SEED_OFFSET = 1_000_000
 #: Second word of the training seed sequence (far from any evaluation chunk index).
 TRAIN_STREAM = 2**31 - 1
 LOSS_CRITIC_TYPES = ("l1", "l2", "smooth_l1")
+LR_SCALES = ("none", "sqrt")
 
 
 def training_seed(seed: int) -> int:
@@ -54,24 +60,31 @@ class TrainSettings:
 
     n_flows: int
     n_swimmers: int
-    frames_per_batch: int
+    rollout_length: int  # L: decisions of every swimmer per update
     total_frames: int
     minibatch_size: int
     minibatches_per_epoch: int | None  # None: one pass over the batch
     epochs: int
     reward_scale: float | None  # None: automatic (1 - gamma) / (v_s T_u), set with the env
-    eval_every: int
-    eval_flows: int
-    eval_swimmers: int
-    checkpoint_every: int
-    checkpoint_seconds: float
-    stop_after_updates: int | None
-    progress: bool
-    compile: bool  # torch.compile of loss + backward (rl.trainer)
-    cudagraphs: bool  # CUDA graphs of the gradient step, GAE and policy (CUDA only)
-    gae_chunk: int | None  # critic evaluations of the GAE in chunks of this many samples
-    compare_baselines: bool
+    eval_every: int = field(metadata=RUNTIME)
+    eval_flows: int = field(metadata=RUNTIME)
+    eval_swimmers: int = field(metadata=RUNTIME)
+    checkpoint_every: int = field(metadata=RUNTIME)
+    checkpoint_seconds: float = field(metadata=RUNTIME)
+    stop_after_updates: int | None = field(metadata=RUNTIME)
+    progress: bool = field(metadata=RUNTIME)
+    compile: bool = field(metadata=RUNTIME)  # torch.compile of loss + backward (rl.trainer)
+    # CUDA graphs of the gradient step, GAE and policy (CUDA only)
+    cudagraphs: bool = field(metadata=RUNTIME)
+    # critic evaluations of the GAE in chunks of this many samples
+    gae_chunk: int | None = field(metadata=RUNTIME)
+    compare_baselines: bool = field(metadata=RUNTIME)
     stagger: int  # groups of flows with offset episodes (SwimmerEnv.stagger)
+
+    @property
+    def frames_per_batch(self) -> int:
+        """Frames (decisions) per PPO update: ``n_flows x n_swimmers x rollout_length``."""
+        return self.n_flows * self.n_swimmers * self.rollout_length
 
     def __post_init__(self) -> None:
         def k(key: str) -> str:
@@ -79,16 +92,14 @@ class TrainSettings:
 
         n_flows, n_swimmers = as_int(k("n_flows"), self.n_flows), as_int(k("n_swimmers"),
                                                                            self.n_swimmers)
-        fpb = as_int(k("frames_per_batch"), self.frames_per_batch)
-        batch = n_flows * n_swimmers
-        require(fpb % batch == 0, k("frames_per_batch"), self.frames_per_batch,
-                f"a multiple of train.n_flows*train.n_swimmers={batch}")
+        length = as_int(k("rollout_length"), self.rollout_length)
+        fpb = n_flows * n_swimmers * length
+        batch = (f"the frames per update, train.n_flows*train.n_swimmers*train.rollout_length"
+                 f" = {n_flows}*{n_swimmers}*{length} = {fpb}")
         total = as_int(k("total_frames"), self.total_frames)
-        require(total >= fpb, k("total_frames"), self.total_frames,
-                f">= train.frames_per_batch={fpb}")
+        require(total >= fpb, k("total_frames"), self.total_frames, f">= {batch}")
         mb = as_int(k("minibatch_size"), self.minibatch_size)
-        require(mb <= fpb, k("minibatch_size"), self.minibatch_size,
-                f"<= train.frames_per_batch={fpb}")
+        require(mb <= fpb, k("minibatch_size"), self.minibatch_size, f"<= {batch}")
         if self.minibatches_per_epoch is not None:
             n_mb = as_int(k("minibatches_per_epoch"), self.minibatches_per_epoch)
             require(n_mb <= fpb // mb, k("minibatches_per_epoch"), self.minibatches_per_epoch,
@@ -144,13 +155,26 @@ class OptimSettings:
 
     lr_actor: float
     lr_critic: float
+    lr_scale: str  # none | sqrt: the rates scaled to the minibatch (rates_for)
+    lr_reference_minibatch: int  # the minibatch size lr_actor, lr_critic are stated for
     anneal: str
     eps: float
     max_grad_norm: float | None
 
+    def rates_for(self, minibatch_size: int) -> tuple[float, float]:
+        """Adam's initial rates ``(actor, critic)`` for minibatches of ``B`` frames:
+        ``lr`` (``lr_scale=none``) or ``lr sqrt(B / B_ref)`` (``sqrt``, ``B_ref =
+        lr_reference_minibatch``: the rates stated for ``B_ref``, the gradient noise kept
+        constant as ``B`` grows)."""
+        factor = 1.0 if self.lr_scale == "none" else math.sqrt(
+            minibatch_size / self.lr_reference_minibatch)
+        return self.lr_actor * factor, self.lr_critic * factor
+
     def __post_init__(self) -> None:
         as_float("optim.lr_actor", self.lr_actor, lambda v: v > 0, "> 0")
         as_float("optim.lr_critic", self.lr_critic, lambda v: v > 0, "> 0")
+        one_of("optim.lr_scale", self.lr_scale, LR_SCALES)
+        as_int("optim.lr_reference_minibatch", self.lr_reference_minibatch)
         one_of("optim.anneal", self.anneal, ("linear", "none"))
         as_float("optim.eps", self.eps, lambda v: v > 0, "> 0")
         if self.max_grad_norm is not None:
@@ -185,8 +209,8 @@ class TrainConfig:
     loss: LossSettings
     optim: OptimSettings
     model: ModelSpec
-    resume: bool
-    overwrite: bool
+    resume: bool = field(metadata=RUNTIME)
+    overwrite: bool = field(metadata=RUNTIME)
     eval_flow: FlowSpec | None  # None: the training flow
 
     @property
@@ -236,7 +260,9 @@ class TrainPlan:
     minibatches of an epoch, the episode size and the seeds."""
 
     rollout_steps: int
-    """``L = frames_per_batch / (n_flows n_swimmers)``: decisions of every swimmer per batch."""
+    """``L = train.rollout_length``: decisions of every swimmer per batch."""
+    frames_per_batch: int
+    """``n_flows x n_swimmers x L``: frames per update."""
     n_updates: int
     """``total_frames // frames_per_batch``."""
     total_frames: int
@@ -248,24 +274,33 @@ class TrainPlan:
     """``epochs x minibatches_per_epoch``."""
     frames_per_episode: int
     """Frames of one paper episode: ``n_swimmers x N``."""
+    lr_actor: float
+    """Adam's initial actor rate (:meth:`OptimSettings.rates_for` the minibatch size)."""
+    lr_critic: float
+    """Adam's initial critic rate."""
     eval_seed: int
     train_seed: int
 
 
 def make_plan(cfg: TrainConfig) -> TrainPlan:
-    """Derived sizes: ``L = frames_per_batch / (F S)``, ``n_updates = total // frames_per_batch``,
-    minibatches per epoch (default: a full pass), and the training and evaluation seeds."""
+    """Derived sizes: ``frames_per_batch = F S L``, ``n_updates = total // frames_per_batch``,
+    minibatches per epoch (default: a full pass), the learning rates, and the training and
+    evaluation seeds."""
     t = cfg.train
     fpb = t.frames_per_batch
     n_updates = t.total_frames // fpb
     n_mb = fpb // t.minibatch_size if t.minibatches_per_epoch is None else t.minibatches_per_epoch
+    lr_actor, lr_critic = cfg.optim.rates_for(t.minibatch_size)
     return TrainPlan(
-        rollout_steps=fpb // (t.n_flows * t.n_swimmers),
+        rollout_steps=t.rollout_length,
+        frames_per_batch=fpb,
         n_updates=n_updates,
         total_frames=n_updates * fpb,
         minibatches_per_epoch=n_mb,
         gradient_steps_per_update=t.epochs * n_mb,
         frames_per_episode=t.n_swimmers * cfg.params.n_decisions,
+        lr_actor=lr_actor,
+        lr_critic=lr_critic,
         eval_seed=cfg.seed + EVAL_SEED_OFFSET,
         train_seed=training_seed(cfg.seed),
     )
@@ -287,12 +322,12 @@ def check_train_memory(cfg: TrainConfig) -> None:
     parts = {
         "train.n_flows": flow_table_bytes(cfg.spec.flow, t.n_flows, dtype, interval)
         + t.n_flows * t.n_swimmers * SWIMMER_BYTES,
-        "train.frames_per_batch": t.frames_per_batch * FRAME_BYTES,
+        "train.rollout_length": t.frames_per_batch * FRAME_BYTES,
         "eval.flows_per_batch": flow_table_bytes(held.flow, eval_flows, dtype, interval)
         + eval_flows * held.sizes.n_swimmers * SWIMMER_BYTES,
     }
     key = max(parts, key=parts.get)
-    value = {"train.n_flows": t.n_flows, "train.frames_per_batch": t.frames_per_batch,
+    value = {"train.n_flows": t.n_flows, "train.rollout_length": t.rollout_length,
              "eval.flows_per_batch": held.sizes.flows_per_batch}[key]
     what = ", ".join(f"{k.split('.')[-1]} {v / 2**30:.1f} GiB" for k, v in parts.items())
     check_memory(sum(parts.values()) + FLOW_WORK_BYTES, cfg.runtime.device, key, value,

@@ -28,7 +28,7 @@ from pathlib import Path
 
 from swimrl.errors import ConfigError
 from swimrl.evaluation.compare import CompareConfig, compare, strategy_variants
-from swimrl.rl.plan import TrainConfig, TrainPlan, check_train_memory, make_plan
+from swimrl.rl.plan import TrainConfig, TrainPlan, TrainSettings, check_train_memory, make_plan
 from swimrl.rl.trainer import PPOTrainer
 from swimrl.runs.checkpoint import load_checkpoint, upgrade_config
 from swimrl.runs.jobs import (
@@ -39,29 +39,16 @@ from swimrl.runs.jobs import (
 )
 from swimrl.runs.layout import RunLayout
 from swimrl.runs.records import flatten, summary_line, write_comparison, write_json
+from swimrl.runtime import Runtime, runtime_keys
 
 log = logging.getLogger(__name__)
 
-#: Keys that may differ between a checkpoint and the config resuming it.
-RESUME_FREE_KEYS = {
-    "resume",
-    "overwrite",
-    "threads",
-    "device",
-    "kernel",
-    "policy",
-    "train.progress",
-    "train.compile",
-    "train.cudagraphs",
-    "train.gae_chunk",
-    "train.compare_baselines",
-    "train.stop_after_updates",
-    "train.checkpoint_every",
-    "train.checkpoint_seconds",
-    "train.eval_every",
-    "train.eval_flows",
-    "train.eval_swimmers",
-}
+#: Keys that may differ between a checkpoint and the config resuming it: the fields marked
+#: :data:`~swimrl.runtime.RUNTIME` (device, threads, kernel, resume, overwrite, and the
+#: ``train.*`` keys of speed, output and cadence), and ``policy`` (a key of
+#: ``conf/evaluate.yaml`` that ``swimrl-train`` does not read).
+RESUME_FREE_KEYS = (runtime_keys(Runtime) | runtime_keys(TrainConfig)
+                    | runtime_keys(TrainSettings, "train.") | {"policy"})
 RESUME_FREE_PREFIXES = ("eval.", "eval_flow.", "hydra.")
 
 
@@ -179,9 +166,8 @@ def _train_locked(cfg: TrainConfig, plan: TrainPlan, out: Path) -> dict | None:
                 f"resume=true with a config that differs from {ckpt}: " + "; ".join(diffs)
             )
     out.mkdir(parents=True, exist_ok=True)
-    trainer = PPOTrainer(cfg, plan, out)
+    trainer = PPOTrainer(cfg, plan, out, state=state if resuming else None)
     if resuming:
-        trainer.restore(ckpt)
         log.info(
             "resumed %s at update %d/%d (%d frames)",
             out,
@@ -192,41 +178,43 @@ def _train_locked(cfg: TrainConfig, plan: TrainPlan, out: Path) -> dict | None:
     t = cfg.train
     log.info(
         "PPO: %d updates x %d frames (%d flows x %d swimmers x %d decisions), %d epochs x %d "
-        "minibatches of %d; reward scale %.4g; %.1f episodes of %d swimmers",
+        "minibatches of %d; Adam %.3g / %.3g; reward scale %.4g; %.1f episodes of %d swimmers",
         plan.n_updates,
-        t.frames_per_batch,
+        plan.frames_per_batch,
         t.n_flows,
         t.n_swimmers,
         plan.rollout_steps,
         t.epochs,
         plan.minibatches_per_epoch,
         t.minibatch_size,
+        plan.lr_actor,
+        plan.lr_critic,
         trainer.reward_scale,
         plan.total_frames / plan.frames_per_episode,
         t.n_swimmers,
     )
-    try:
-        with preemption_signals() as preemption:
+    with preemption_signals() as preemption:
+        try:
             finished = trainer.train(cfg.train.stop_after_updates, preemption)
-            u, frames = trainer.counters["updates"], trainer.counters["frames"]
-            if preemption.requested:
-                where = "during the periodic evaluation " if trainer.eval_pending else ""
-                preemption.stop(f"{where}after update {u}/{plan.n_updates} ({frames} frames): "
-                                f"checkpoint written to {run.checkpoint}; continue with "
-                                "resume=true")
-            if not finished:
-                log.info("stopped after update %d/%d; continue with resume=true", u,
-                         plan.n_updates)
-                return None
-            trainer.save_policy()
-            try:
-                metrics = trainer.evaluate(cfg.held_out)
-            except EvaluationInterruptedError:
-                preemption.stop(f"during the final evaluation (training finished, {frames} "
-                                f"frames; checkpoint {run.checkpoint}): continue with "
-                                "resume=true, which makes the final evaluation")
-    finally:
-        trainer.close()
+        finally:
+            trainer.close()  # the TensorBoard logger: training is over
+        u, frames = trainer.counters["updates"], trainer.counters["frames"]
+        if preemption.requested:
+            where = "during the periodic evaluation " if trainer.eval_pending else ""
+            preemption.stop(f"{where}after update {u}/{plan.n_updates} ({frames} frames): "
+                            f"checkpoint written to {run.checkpoint}; continue with "
+                            "resume=true")
+        if not finished:
+            log.info("stopped after update %d/%d; continue with resume=true", u,
+                     plan.n_updates)
+            return None
+        trainer.save_policy()
+        try:
+            metrics = trainer.evaluate(cfg.held_out)
+        except EvaluationInterruptedError:
+            preemption.stop(f"during the final evaluation (training finished, {frames} "
+                            f"frames; checkpoint {run.checkpoint}): continue with "
+                            "resume=true, which makes the final evaluation")
     metrics["policy"] = str(out)
     metrics["training"] = {
         **trainer.counters,

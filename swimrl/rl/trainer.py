@@ -9,7 +9,8 @@ One *update* ``u``:
    ``minibatches_per_epoch`` minibatches: loss ``= loss_objective + loss_entropy +
    loss_critic`` (``ClipPPOLoss``, advantages normalised per minibatch), one backward, the
    gradient norm of actor and critic clipped separately, one Adam step each;
-4. both learning rates step (``make_schedulers``): constant, or down linearly (``optim.anneal``).
+4. both learning rates step (the schedulers of ``make_agent``): constant, or down linearly
+   (``optim.anneal``).
 
 Periodic deterministic evaluations (``Lambda = Lambda_max tanh(mu)``) on held-out flows use
 :func:`swimrl.evaluation.rollout.evaluate` (``seed + EVAL_SEED_OFFSET``, the same flows every time,
@@ -69,7 +70,10 @@ LOSS_LOG_KEYS = (
 class PPOTrainer:
     """Owns env, networks, loss, optimisers and counters of one training run."""
 
-    def __init__(self, cfg: TrainConfig, plan: TrainPlan, run_dir: Path):
+    def __init__(self, cfg: TrainConfig, plan: TrainPlan, run_dir: Path,
+                 state: dict | None = None):
+        """A fresh trainer, or (``state``: a checkpoint's content,
+        :func:`~swimrl.runs.checkpoint.load_checkpoint`) one that continues from it."""
         self.cfg, self.plan, self.run = cfg, plan, RunLayout(run_dir)
         rt, t = cfg.runtime, cfg.train
         self.device, self.dtype = rt.device, rt.dtype
@@ -77,15 +81,10 @@ class PPOTrainer:
         self.env = rlb.make_env(cfg.spec.flow, cfg.params, rt, t, cfg.loss, plan.train_seed)
         self.swimmer_env = rlb.base_env(self.env)
         self.reward_scale = rlb.reward_scale_of(self.env)
-        self.actor = rlb.make_actor(cfg.model, self.env, rt)
-        self.critic = rlb.make_critic(cfg.model, self.env, rt)
+        (self.actor, self.critic, self.loss, self.gae, self.optimizers,
+         self.schedulers) = rlb.make_agent(cfg, plan, self.env)
         self.policy = deterministic_actor(self.actor)
-        self.loss, self.gae = rlb.make_loss(cfg.loss, self.actor, self.critic, t.gae_chunk)
-        self.optimizers = rlb.make_optimizers(cfg.optim, self.actor, self.critic, rt.device,
-                                              t.cudagraphs)
-        self.schedulers = rlb.make_schedulers(cfg.optim, self.optimizers, plan.n_updates)
         self.counters = {"frames": 0, "updates": 0, "wall_s": 0.0}
-        self.meta = policy_meta(cfg.params, cfg.model, str(rt.dtype).replace("torch.", ""))
         self.config = cfg.record
         self._loss_fn = None  # built on the first update (see _compiled_loss_backward)
         self._step_fn = None  # the gradient step, built on the first update (_step_function)
@@ -98,8 +97,16 @@ class PPOTrainer:
         self.preemption: Preemption | None = None
         #: A periodic evaluation was started and not finished (a signal stopped it).
         self.eval_pending = False
+        if state is not None:
+            self.load_state(state)
 
     # -- state --------------------------------------------------------------------------------
+    @property
+    def meta(self) -> dict:
+        """What a policy file records to rebuild the actor (:func:`policy_meta`)."""
+        return policy_meta(self.cfg.params, self.cfg.model,
+                           str(self.dtype).replace("torch.", ""))
+
     @property
     def finished_training(self) -> bool:
         return self.counters["updates"] >= self.plan.n_updates
@@ -127,8 +134,14 @@ class PPOTrainer:
         return path
 
     def restore(self, path: Path) -> dict:
-        """Load the training state written by :meth:`save_checkpoint`."""
+        """Load the training state written by :meth:`save_checkpoint` from ``path``."""
         ck = load_file(path, map_location=self.device)
+        self.load_state(ck)
+        return ck
+
+    def load_state(self, ck: dict) -> None:
+        """Continue from a checkpoint's content (:meth:`save_checkpoint`): networks,
+        optimisers, schedulers, RNG states, counters and the curve up to it."""
         self.actor.load_state_dict(ck["actor"])
         self.critic.load_state_dict(ck["critic"])
         for opt, st in zip(self.optimizers, ck["optimizers"], strict=True):
@@ -145,7 +158,6 @@ class PPOTrainer:
         if curves.is_file():
             self.curve_base = {step: row for step, row in read_curves_csv(curves).items()
                                if step <= self.counters["frames"]}
-        return ck
 
     def _match_optimizers_to_device(self) -> None:
         """After loading optimiser states written by another path: learning rates as device

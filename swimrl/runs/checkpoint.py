@@ -46,10 +46,13 @@ LEGACY_KEYS = {
 }
 #: Keys added later, with the value that reproduces what the code did before they existed
 #: (stochastic flow: the readings of the paper's specification, conf/flow/stochastic.yaml;
-#: replay: decoding on the run's grid, one start per flow; every flow: no bound on sigma).
+#: replay: decoding on the run's grid, one start per flow; every flow: no bound on sigma,
+#: the learning rates as given).
 ADDED_KEYS = {
     "*": {"model.min_std": NO_STD_BOUND,  # every flow
           "train.stagger": 1,
+          "optim.lr_scale": "none",  # the rates as given
+          "optim.lr_reference_minibatch": 2560,
           "task": {"name": "displacement", "distance": 20.0, "arrival_radius": 1.0},
           "reward": {"energy_weight": 0.0, "shape_change_weight": 0.0}},
     "stochastic": {
@@ -62,11 +65,23 @@ ADDED_KEYS = {
 }
 
 
+def _rollout_length(train: dict) -> None:
+    """``train.frames_per_batch`` (the input before ``train.rollout_length``) ->
+    ``rollout_length = frames_per_batch / (n_flows n_swimmers)``."""
+    if "frames_per_batch" in train and "rollout_length" not in train:
+        batch = int(train["n_flows"]) * int(train["n_swimmers"])
+        train["rollout_length"] = int(train.pop("frames_per_batch")) // batch
+    train.pop("frames_per_batch", None)
+
+
 def upgrade_config(config: dict) -> dict:
     """A checkpoint's stored config with renamed keys (:data:`LEGACY_KEYS`) moved to their
-    current names and keys added since (:data:`ADDED_KEYS`) set to the value that
-    reproduces the old behaviour; the values present are unchanged."""
+    current names, ``train.frames_per_batch`` stated as ``train.rollout_length`` (the same
+    batch), and keys added since (:data:`ADDED_KEYS`) set to the value that reproduces the
+    old behaviour; the values present are unchanged."""
     out = _copy(config)
+    if isinstance(out.get("train"), dict):
+        _rollout_length(out["train"])
     flow = out.get("flow") if isinstance(out.get("flow"), dict) else None
     added = {**ADDED_KEYS["*"], **ADDED_KEYS.get(flow.get("name") if flow else None, {})}
     for key, value in added.items():

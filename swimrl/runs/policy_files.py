@@ -48,7 +48,7 @@ CHECKPOINT_FORMAT = "swimrl-ppo-checkpoint/1"
 POLICY_FORMAT = "swimrl-ppo-policy/1"
 
 #: Where ``pretrained/NAME`` is looked up (one sub-directory per policy).
-PRETRAINED_ROOT = Path(__file__).resolve().parent / "pretrained"
+PRETRAINED_ROOT = Path(__file__).resolve().parents[1] / "policies" / "pretrained"
 PRETRAINED_PREFIX = "pretrained/"
 SHORT_NAMES = ("ku0.1", "ku1", "ku10", "ku1e7")
 

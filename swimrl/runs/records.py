@@ -19,7 +19,7 @@ from pathlib import Path
 import numpy as np
 
 from swimrl.errors import NonFiniteError
-from swimrl.flows.labels import flow_display
+from swimrl.flows.labels import ku_display
 from swimrl.runs.atomic import atomic_write, atomic_write_text
 from swimrl.runs.layout import RunLayout
 
@@ -104,7 +104,7 @@ def flatten(d: dict, prefix: str = "") -> dict:
 def summary_line(m: dict) -> str:
     """One line: strategy, flow, R_hat +- SEM, size, time and speed."""
     return (
-        f"{m['strategy']} {flow_display(m['config']['flow'], '=')}: "
+        f"{m['strategy']} {ku_display(m['config']['flow'], '=')}: "
         f"R_hat = {m['R_hat_mean']:.4f} +- "
         f"{m['R_hat_sem']:.4f} (SEM; std over flows {m['R_hat_std']:.4f}) over {m['n_flows']} "
         f"flows x {m['n_swimmers']} swimmers; {m['wall_s']:.1f} s, "
@@ -118,7 +118,7 @@ def summary_line(m: dict) -> str:
 def comparison_markdown(record: dict) -> str:
     """A ``comparison.json`` record as a Markdown table (paired ratios to the first row)."""
     first = record["rows"][0]["label"]
-    title = (f"{flow_display(record['config']['flow'])}, {record['n_flows']} flows x "
+    title = (f"{ku_display(record['config']['flow'])}, {record['n_flows']} flows x "
              f"{record['n_swimmers']} swimmers, seed {record['seed']}\n\n")
     if record.get("task") == "target":
         title = (f"target at {record['target_distance']:g} ell_f, arrival radius "

@@ -7,6 +7,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass, replace
 
+from swimrl.conf_values import yaml_value
 from swimrl.env import EnvParams
 from swimrl.errors import as_bool, as_int, keep_number_types, require
 from swimrl.flows.build import FlowSpec
@@ -37,7 +38,7 @@ class EvalSizes:
     n_swimmers: int
     flows_per_batch: int
     progress: bool
-    record: int = 0  # conf/evaluate.yaml's eval.record (tests/test_config_sources.py)
+    record: int = yaml_value("evaluate", "eval.record")
 
     def __post_init__(self) -> None:
         as_bool("eval.progress", self.progress)

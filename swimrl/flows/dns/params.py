@@ -5,8 +5,8 @@
 with ``nu`` the viscosity, ``alpha`` the hypo-friction coefficient and ``h = hypo_power``
 (``h = 0`` is the paper's linear friction ``-alpha u``), ``f`` the white-in-time forcing that
 injects energy at the mean rate ``epsilon``, peaked at ``|k| = k_f`` with Gaussian width
-``forcing_width``. The defaults are the values of ``conf/solver/dns.yaml`` (a test,
-``tests/test_config_sources.py``, keeps them equal); ``docs/dns.md`` derives them.
+``forcing_width``. The defaults are read from ``conf/solver/dns.yaml`` (``dtype`` and
+``device``: ``conf/dns.yaml``; :mod:`swimrl.conf_values`); ``docs/dns.md`` derives them.
 """
 
 from __future__ import annotations
@@ -16,6 +16,7 @@ from dataclasses import asdict, dataclass, fields
 
 import torch
 
+from swimrl.conf_values import yaml_value
 from swimrl.errors import ConfigError
 from swimrl.flows.dns.grid import dealias_cutoff
 
@@ -34,19 +35,19 @@ class DNSParams:
     checks.
     """
 
-    n: int = 512
-    length: float = 2 * math.pi
-    nu: float = 1.0e-4
-    alpha: float = 0.5
-    hypo_power: float = 1.0
-    epsilon: float = 1.0
-    k_f: float = 3.0
-    forcing_width: float = 0.5
-    dt: float = 7.5e-4
-    dtype: str = "float32"
-    device: str = "cpu"
-    cfl_max: float = 1.0
-    cfl_every: int = 1
+    n: int = yaml_value("solver/dns", "dns.n")
+    length: float = yaml_value("solver/dns", "dns.length")
+    nu: float = yaml_value("solver/dns", "dns.nu")
+    alpha: float = yaml_value("solver/dns", "dns.alpha")
+    hypo_power: float = yaml_value("solver/dns", "dns.hypo_power")
+    epsilon: float = yaml_value("solver/dns", "dns.epsilon")
+    k_f: float = yaml_value("solver/dns", "dns.k_f")
+    forcing_width: float = yaml_value("solver/dns", "dns.forcing_width")
+    dt: float = yaml_value("solver/dns", "dns.dt")
+    dtype: str = yaml_value("dns", "dtype")
+    device: str = yaml_value("dns", "device")
+    cfl_max: float = yaml_value("solver/dns", "dns.cfl_max")
+    cfl_every: int = yaml_value("solver/dns", "dns.cfl_every")
 
     def __post_init__(self) -> None:
         def bad(key: str, rng: str) -> ConfigError:

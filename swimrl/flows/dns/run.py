@@ -26,6 +26,7 @@ from typing import Any
 import zarr
 from tqdm import tqdm
 
+from swimrl.conf_values import yaml_value
 from swimrl.errors import as_bool, as_float, as_int, keep_number_types, one_of
 from swimrl.flows.base import CHANNELS
 from swimrl.flows.dns import diagnostics as diag
@@ -41,7 +42,7 @@ INIT_KINDS = ("rest", "random")
 @dataclass(frozen=True)
 class DNSRun:
     """Everything ``swimrl-dns`` needs (``conf/dns.yaml``; keys in the error messages). The
-    defaults (for library calls) are ``conf/dns.yaml``'s (``tests/test_config_sources.py``)."""
+    defaults (for library calls) are read from ``conf/dns.yaml`` (:mod:`swimrl.conf_values`)."""
 
     params: DNSParams
     seed: int
@@ -53,13 +54,13 @@ class DNSRun:
     path: Path
     n_times: int
     interval_tau_k: float
-    chunk_times: int = 1
-    overwrite: bool = False
-    extend: bool = False
-    checkpoint_seconds: float = 60.0
-    diag_every: int = 50
-    max_steps: int | None = None
-    progress: bool = True
+    chunk_times: int = yaml_value("dns", "store.chunk_times")
+    overwrite: bool = yaml_value("dns", "store.overwrite")
+    extend: bool = yaml_value("dns", "store.extend")
+    checkpoint_seconds: float = yaml_value("dns", "store.checkpoint_seconds")
+    diag_every: int = yaml_value("dns", "store.diag_every")
+    max_steps: int | None = yaml_value("dns", "max_steps")
+    progress: bool = yaml_value("dns", "progress")
 
     def __post_init__(self) -> None:
         as_int("seed", self.seed, low=0)

@@ -1,4 +1,8 @@
-r"""The paper's figures from the shipped policies and the committed records (``swimrl-figures``).
+r"""The paper: its figures from the shipped policies and the committed records (``swimrl-figures``).
+
+The library (``import swimrl``, the env, the flows, the evaluation, the training, the analysis)
+never imports this package: it sits above :mod:`swimrl.config` and below :mod:`swimrl.cli`
+(``pyproject.toml``'s import-linter layers).
 
 Each figure has a ``fig_<name>(data..., path)`` function that draws it from arrays and returns
 what it drew, and a ``build_<name>(cfg)`` builder that gathers the arrays (evaluations cached
@@ -19,8 +23,10 @@ above the two modules they share:
 * :mod:`.records`: the configuration (:class:`~.records.FiguresConfig`), the figure records,
   the evaluations and their cache; :mod:`.style`: colours, labels, drawing and saving;
 * :mod:`.build`: :data:`~.build.BUILDERS` (name -> builder, in build order) and
-  :func:`~.build.build_figures`.
+  :func:`~.build.build_figures`;
+* :mod:`.config`: ``conf/figures.yaml`` -> :class:`~.records.FiguresConfig`
+  (:func:`~.config.figures_config`, through the helpers of :mod:`swimrl.config`).
 
-This package imports nothing itself: :mod:`swimrl.config` reads :mod:`.records` without the
-builders.
+This package imports nothing itself (``swimrl-figures`` imports :mod:`.build` and
+:mod:`.config`).
 """

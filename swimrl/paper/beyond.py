@@ -29,7 +29,7 @@ from pathlib import Path
 import numpy as np
 
 from swimrl.analysis.plots import pyplot
-from swimrl.flows.labels import ku_display, parse_ku_name
+from swimrl.flows.labels import ku_display, ku_name, parse_ku_name
 from swimrl.policies.baselines import StrategyLabel
 from swimrl.task import TaskSpec
 
@@ -225,11 +225,11 @@ def build_beyond_target_paths(cfg: FiguresConfig) -> dict:
         task = TaskSpec("target", distance=float(dist), arrival_radius=rec["arrival_radius"])
         setup = eval_setup(cfg, ku, 1, N_PATHS, task=task)
         names = list(actors.values())
-        a = cached(cfg, f"target_paths_{ku:g}_D{dist:g}", cache_inputs(cfg, setup, names),
+        a = cached(cfg, f"target_paths_{ku_name(ku)}_D{dist:g}", cache_inputs(cfg, setup, names),
                    lambda setup=setup, names=names: record_strategies(setup, names, "paths"))
         xy = target_frame(a["position"][0], a["target"][0])  # (K, n, N+1, 2)
         arrival = a["arrival_time"][0]  # (K, n), NaN: not arrived
-        out[str(ku)] = {"distance": float(dist), "actors": actors, "arrived": {}}
+        out[ku_name(ku)] = {"distance": float(dist), "actors": actors, "arrived": {}}
         for col, kind in enumerate(kinds):
             ax = axes[row, col]
             if kind not in actors:
@@ -246,7 +246,7 @@ def build_beyond_target_paths(cfg: FiguresConfig) -> dict:
                 if np.isfinite(arrival[k, i]):
                     ax.plot(*xy[k, i, -1], "x", color=line.get_color(), ms=6)
             arrived = int(np.isfinite(arrival[k]).sum())
-            out[str(ku)]["arrived"][kind] = arrived
+            out[ku_name(ku)]["arrived"][kind] = arrived
             ax.set_title(f"{ku_display(ku)}, D = {dist:g}: {kind}\n{arrived} of {xy.shape[1]} "
                          "arrived", fontsize=8)
             ax.set_aspect("equal")
@@ -327,8 +327,8 @@ def build_beyond_energy(cfg: FiguresConfig) -> dict:
     maps = energy_map_policies(recs)
     if maps:
         fig_energy_maps(cfg, maps, Path(cfg.out) / "beyondEnergyMaps.png")
-    return {"path": str(path), **{str(k): v for k, v in out.items()},
-            "maps": {f"{ku:g}, w = {w:g}": p for (ku, w), p in maps.items()}}
+    return {"path": str(path), **{ku_name(k): v for k, v in out.items()},
+            "maps": {f"{ku_name(ku)}_w{w:g}": p for (ku, w), p in maps.items()}}
 
 
 def energy_map_policies(recs: dict[float, dict]) -> dict[tuple[float, float], str]:
@@ -357,7 +357,7 @@ def fig_energy_maps(cfg: FiguresConfig, policies: dict[tuple[float, float], str]
     im = None
     for i, (ku, w) in enumerate(keys):
         setup = eval_setup(cfg, ku, cfg.n_flows, cfg.n_swimmers)
-        ev = Evaluation(f"energy_{ku:g}_w{w:g}", "statistics", setup,
+        ev = Evaluation(f"energy_{ku_name(ku)}_w{w:g}", "statistics", setup,
                         {"smart": policies[(ku, w)]})
         a = map_record(cfg, ev)
         for row, other in enumerate(("n_theta", "omega")):

@@ -70,7 +70,7 @@ from swimrl.runs.records import read_npz, write_json, write_npz
 from swimrl.runs.spec import EvalSizes, RunSpec
 from swimrl.runtime import Runtime
 
-#: The figures, in build order (the keys of :data:`swimrl.analysis.figures.build.BUILDERS`).
+#: The figures, in build order (the keys of :data:`swimrl.paper.build.BUILDERS`).
 FIGURES = ("swimmer", "smartPerformance", "ku0.1", "kuInf", "ku_pattern", "trainingCurves",
            "ablation", "robustness-noise", "robustness", "dnsFlow", "videos", "beyondTarget",
            "beyondTargetPaths", "beyondEnergy")
@@ -85,7 +85,7 @@ KUS = (0.1, 1.0, 10.0, 1e7)
 #: Decisions between video frames (4 tau_K at T_u = 0.1 tau_K: 51 frames over T = 200 tau_K).
 FRAME_EVERY = 40
 #: The strategies of a record (:func:`ku_record`), in the order of its first axis, by the
-#: names the figures show (the keys of :data:`~swimrl.analysis.figures.style.COLORS`).
+#: names the figures show (the keys of :data:`~swimrl.paper.style.COLORS`).
 RECORD_STRATEGIES = ("smart", "naive", "STO")
 #: Directory name of the policies shipped before the paper-budget runs: no figure input.
 SHIPPED_BEFORE = "shipped_before"

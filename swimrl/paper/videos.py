@@ -5,8 +5,8 @@ r"""The paper's supplemental videos (MP4, Matplotlib + the ffmpeg of ``imageio-f
 * :func:`video_cloud` (videos 6-9): the displacements of all recorded swimmers (a dispersion
   cloud from the origin), inset: the ensemble-mean distance from the start.
 
-Both take the arrays of :func:`swimrl.analysis.figures.records.ku_record` (or of the DNS
-replay record, :func:`swimrl.analysis.figures.dns.dns_record`) and return what they drew;
+Both take the arrays of :func:`swimrl.paper.records.ku_record` (or of the DNS
+replay record, :func:`swimrl.paper.dns.dns_record`) and return what they drew;
 ``flow`` is the Kubo number or a label (``"DNS"``), ``unit`` the length unit of the positions.
 :func:`build_videos` makes all ten.
 """
@@ -18,7 +18,7 @@ from pathlib import Path
 import numpy as np
 
 from swimrl.analysis.plots import pyplot
-from swimrl.flows.labels import flow_display, ku_name
+from swimrl.flows.labels import ku_display, ku_name
 
 from .dns import dns_record, shipped_before_pending
 from .records import KUS, RECORD_STRATEGIES, FiguresConfig, ku_record
@@ -91,7 +91,7 @@ def video_trajectories(rec: dict, flow: float | str, path: Path, fps: int = 8,
             for i, line in enumerate(row):
                 line.set_data(traj[j, i, : f + 1, 0], traj[j, i, : f + 1, 1])
             marks[j].set_data(t[f: f + 1], dist[j, f: f + 1])
-        title.set_text(f"{flow_display(flow)}, t = {t[f]:.0f} $\\tau_K$")
+        title.set_text(f"{ku_display(flow)}, t = {t[f]:.0f} $\\tau_K$")
 
     _save(fig, FuncAnimation(fig, frame, frames=n), path, fps)
     return {"frames": n, "extent": extent, "distance": dist[:, -1].tolist()}
@@ -127,7 +127,7 @@ def video_cloud(rec: dict, flow: float | str, path: Path, fps: int = 8,
         for j, d in enumerate(dots):
             d.set_data(cloud[j, :, f, 0], cloud[j, :, f, 1])
             marks[j].set_data(t[f: f + 1], dist[j, f: f + 1])
-        title.set_text(f"{flow_display(flow)}, {cloud.shape[1]} swimmers per strategy, "
+        title.set_text(f"{ku_display(flow)}, {cloud.shape[1]} swimmers per strategy, "
                        f"t = {t[f]:.0f} $\\tau_K$")
 
     _save(fig, FuncAnimation(fig, frame, frames=n), path, fps)

@@ -1,0 +1,220 @@
+r"""Analytic flows: a constant velocity gradient, Arnold-Beltrami-Childress, 2D Taylor-Green.
+
+Each gives ``u(x, t)`` and ``A_ij = d_j u_i`` in closed form at batched positions
+``(F, S, d)`` (:class:`~swimrl.flows.pointwise.PointFlow`); reference scales as in 2D:
+``u_rms = <u.u>^{1/2}`` (all components, space average) and ``tau_K = <A_ij A_ij>^{-1/2}``.
+
+* :class:`LinearFlow` (2D or 3D): ``u = A x`` with a constant matrix ``A`` (``flow.gradient``),
+  incompressible: ``tr A = 0`` is required (:func:`check_gradient`). No velocity scale
+  (``u_rms = None``: ``|u|`` grows with ``|x|``); ``tau_K = (A_ij A_ij)^{-1/2}``. The exact
+  test bed of Jeffery orbits (simple shear ``A = [[0, gamma, 0], [0, 0, 0], [0, 0, 0]]``).
+* :class:`ABCFlow` (3D): a superposition of ABC flows (Arnold 1965, Childress 1970; Dombre
+  et al. 1986, J. Fluid Mech. 167, 353), term ``(A, B, C, k)``:
+
+  ``u = (A sin(kz + phi) + C cos(ky + phi), B sin(kx + phi) + A cos(kz + phi),
+  C sin(ky + phi) + B cos(kx + phi))``,  ``phi(t) = eps sin(omega t)``.
+
+  With ``eps = 0`` it is steady: one term is the stationary ABC flow of Colabrese et al.
+  2018 (Phys. Rev. Fluids 3, 084301; the default ``A = B = C = k = 1``), two terms, with
+  their parameters, the "stationary superposition of two ABC flows" of Gustavsson et al.
+  2017 (Eur. Phys. J. E 40, 110). Both of those flows are steady; the time dependence
+  here is the phase-modulated ABC flow of the kinematic-dynamo literature (Brummell,
+  Cattaneo & Tobias 2001, Fluid Dyn. Res. 28, 237: every argument shifted by
+  ``eps sin(omega t)``), i.e. the steady pattern translated by ``-phi/k (1, 1, 1)``:
+  incompressible and Beltrami (``curl u = k u`` per term) at every ``t``. Each term has
+  ``<|u|^2> = A^2 + B^2 + C^2``, ``<A_ij A_ij> = k^2 (A^2 + B^2 + C^2)``; terms of equal ``k``
+  add their amplitudes, terms of different ``k`` their moments.
+* :class:`TaylorGreenFlow` (2D, steady cellular flow):
+  ``u = U (sin kx cos ky, -cos kx sin ky)``; ``u_rms = U / sqrt(2)``, ``tau_K = 1/(U k)``.
+
+Not yet offered by ``build_flow`` and the configs (the flow registry wires them in).
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Iterable, Mapping, Sequence
+
+import torch
+
+from swimrl.errors import fail, require
+from swimrl.flows.pointwise import PointFlow
+
+#: The config key of the linear flow's matrix, and what it may be.
+GRADIENT_KEY = "flow.gradient"
+GRADIENT_ALLOWED = ("a 2x2 or 3x3 matrix (a list of rows) of finite numbers with zero trace "
+                    "(incompressible: A_11 + A_22 (+ A_33) = 0)")
+#: ``|tr A|`` allowed, relative to ``max |A_ij|`` (decimal entries such as 0.1 + 0.2 - 0.3).
+TRACE_TOLERANCE = 1e-9
+
+
+def _plain(value):
+    """``value`` as nested lists (tensors, arrays, ListConfig), for checking and a one-line
+    message; anything else unchanged."""
+    if hasattr(value, "tolist"):
+        return value.tolist()
+    if isinstance(value, str | bytes | Mapping) or not isinstance(value, Iterable):
+        return value
+    return [_plain(v) for v in value]
+
+
+def _number(v) -> float:
+    """A finite real number (not a bool), or NaN."""
+    if isinstance(v, bool):
+        return math.nan
+    try:
+        return float(v)
+    except (TypeError, ValueError):
+        return math.nan
+
+
+def check_gradient(value) -> tuple[tuple[float, ...], ...]:
+    """``value`` as a traceless ``d x d`` matrix, ``d`` = 2 or 3, or a :class:`ConfigError`
+    ``flow.gradient=VALUE is invalid: allowed a 2x2 or 3x3 matrix ... zero trace ...``.
+
+    ``|tr A| <= 1e-9 max |A_ij|`` passes (round-off of decimal entries)."""
+    shown = _plain(value)
+    rows = shown if isinstance(shown, list) else None
+    ok = (rows is not None and len(rows) in (2, 3)
+          and all(isinstance(r, list) and len(r) == len(rows) for r in rows))
+    require(ok, GRADIENT_KEY, shown, GRADIENT_ALLOWED)
+    matrix = tuple(tuple(_number(v) for v in r) for r in rows)
+    finite = all(math.isfinite(v) for r in matrix for v in r)
+    require(finite, GRADIENT_KEY, shown, GRADIENT_ALLOWED)
+    trace = math.fsum(matrix[i][i] for i in range(len(matrix)))
+    scale = max(abs(v) for r in matrix for v in r)
+    if abs(trace) > TRACE_TOLERANCE * scale:
+        fail(GRADIENT_KEY, shown, f"{GRADIENT_ALLOWED}; its trace is {trace:g}")
+    return matrix
+
+
+class LinearFlow(PointFlow):
+    """``u(x) = A x``, ``d_j u_i = A_ij``: a constant velocity gradient in 2D or 3D.
+
+    ``gradient`` is checked by :func:`check_gradient` (key ``flow.gradient``); ``dim`` is
+    its size. ``u_rms = None`` (no velocity scale), ``tau_k = (A_ij A_ij)^{-1/2}``
+    (``inf`` for ``A = 0``).
+    """
+
+    u_rms = None
+
+    def __init__(self, gradient, n_flows: int = 1, device: torch.device | str = "cpu",
+                 dtype: torch.dtype = torch.float32):
+        matrix = check_gradient(gradient)
+        super().__init__(n_flows, device, dtype)
+        self.dim = len(matrix)
+        self.gradient = torch.tensor(matrix, device=self.device, dtype=dtype)
+        norm2 = math.fsum(v * v for r in matrix for v in r)
+        self.tau_k = norm2**-0.5 if norm2 > 0 else math.inf
+
+    def sample(self, pos: torch.Tensor, flows: torch.Tensor | None = None
+               ) -> tuple[torch.Tensor, torch.Tensor]:
+        """``u_i = A_ij x_j`` ``(F', S, d)`` and ``A`` broadcast to ``(F', S, d, d)``."""
+        self.flow_index(pos, flows)
+        u = pos @ self.gradient.T
+        return u, self.gradient.expand(*pos.shape[:2], self.dim, self.dim)
+
+
+def _check_terms(terms) -> tuple[tuple[float, float, float, float], ...]:
+    """ABC terms ``((A, B, C, k), ...)``: finite amplitudes, ``k > 0``; else ConfigError
+    naming ``flow.terms``."""
+    allowed = "a non-empty list of [A, B, C, k] with finite A, B, C and k > 0"
+    shown = _plain(terms)
+    ok = (isinstance(shown, list) and len(shown) > 0
+          and all(isinstance(t, list) and len(t) == 4 for t in shown))
+    require(ok, "flow.terms", shown, allowed)
+    out = tuple(tuple(_number(v) for v in t) for t in shown)
+    ok = all(math.isfinite(v) for t in out for v in t) and all(t[3] > 0 for t in out)
+    require(ok, "flow.terms", shown, allowed)
+    return out  # type: ignore[return-value]
+
+
+class ABCFlow(PointFlow):
+    """A superposition of (phase-modulated) Arnold-Beltrami-Childress flows in 3D.
+
+    ``u = sum_terms (A sin Z + C cos Y, B sin X + A cos Z, C sin Y + B cos X)`` with
+    ``X = k x + phi``, ``Y = k y + phi``, ``Z = k z + phi``, ``phi = eps sin(omega t)``
+    (module docstring: forms and sources). ``terms = ((A, B, C, k), ...)``; ``modulation`` is
+    ``eps``, ``frequency`` is ``omega``. The gradient, ``A_ij = d_j u_i``, has a zero diagonal
+    (``u_x`` depends on ``y, z`` only, ...), so ``tr A = 0`` exactly.
+    """
+
+    dim = 3
+
+    def __init__(self, n_flows: int = 1, terms: Sequence = ((1.0, 1.0, 1.0, 1.0),),
+                 modulation: float = 0.0, frequency: float = 0.0,
+                 device: torch.device | str = "cpu", dtype: torch.dtype = torch.float32):
+        self.terms = _check_terms(terms)
+        self.modulation = _number(modulation)
+        self.frequency = _number(frequency)
+        require(math.isfinite(self.modulation), "flow.modulation", modulation, "a finite number")
+        require(math.isfinite(self.frequency), "flow.frequency", frequency, "a finite number")
+        super().__init__(n_flows, device, dtype)
+        by_k: dict[float, list[float]] = {}
+        for a, b, c, k in self.terms:
+            s = by_k.setdefault(k, [0.0, 0.0, 0.0])
+            s[0], s[1], s[2] = s[0] + a, s[1] + b, s[2] + c
+        energy = {k: math.fsum(v * v for v in s) for k, s in by_k.items()}
+        u2 = math.fsum(energy.values())
+        a2 = math.fsum(k * k * e for k, e in energy.items())
+        self.u_rms = math.sqrt(u2)
+        self.tau_k = a2**-0.5 if a2 > 0 else math.inf
+
+    def phase(self, flows: torch.Tensor) -> torch.Tensor:
+        """``phi(t) = eps sin(omega t)`` of the flows ``(F', 1)``, computed in float64."""
+        return self.modulation * torch.sin(self.frequency * self.times(flows))
+
+    def sample(self, pos: torch.Tensor, flows: torch.Tensor | None = None
+               ) -> tuple[torch.Tensor, torch.Tensor]:
+        """``u`` ``(F', S, 3)`` and ``A_ij = d_j u_i`` ``(F', S, 3, 3)`` at ``pos``."""
+        flows = self.flow_index(pos, flows)
+        phi = self.phase(flows).to(self.dtype).unsqueeze(-1)         # (F', 1, 1)
+        u = torch.zeros_like(pos)
+        grad = pos.new_zeros(*pos.shape, 3)
+        for a, b, c, k in self.terms:
+            arg = k * pos + phi
+            s, co = torch.sin(arg), torch.cos(arg)
+            sx, sy, sz = s.unbind(-1)
+            cx, cy, cz = co.unbind(-1)
+            u += torch.stack((a * sz + c * cy, b * sx + a * cz, c * sy + b * cx), -1)
+            grad[..., 0, 1] -= c * k * sy
+            grad[..., 0, 2] += a * k * cz
+            grad[..., 1, 0] += b * k * cx
+            grad[..., 1, 2] -= a * k * sz
+            grad[..., 2, 0] -= b * k * sx
+            grad[..., 2, 1] += c * k * cy
+        return u, grad
+
+
+class TaylorGreenFlow(PointFlow):
+    """The steady 2D Taylor-Green (cellular) flow ``u = U (sin kx cos ky, -cos kx sin ky)``.
+
+    ``A = U k [[cos kx cos ky, -sin kx sin ky], [sin kx sin ky, -cos kx cos ky]]``;
+    ``u_rms = U / sqrt(2)``, ``tau_K = 1 / (U k)``, vorticity ``omega = 2 U k sin kx sin ky``.
+    """
+
+    dim = 2
+
+    def __init__(self, n_flows: int = 1, amplitude: float = 1.0, wavenumber: float = 1.0,
+                 device: torch.device | str = "cpu", dtype: torch.dtype = torch.float32):
+        self.amplitude = _number(amplitude)
+        self.wavenumber = _number(wavenumber)
+        require(math.isfinite(self.amplitude), "flow.amplitude", amplitude, "a finite number")
+        require(math.isfinite(self.wavenumber) and self.wavenumber > 0, "flow.wavenumber",
+                wavenumber, "a finite number > 0")
+        super().__init__(n_flows, device, dtype)
+        self.u_rms = abs(self.amplitude) / math.sqrt(2.0)
+        rate = abs(self.amplitude) * self.wavenumber
+        self.tau_k = 1.0 / rate if rate > 0 else math.inf
+
+    def sample(self, pos: torch.Tensor, flows: torch.Tensor | None = None
+               ) -> tuple[torch.Tensor, torch.Tensor]:
+        """``u`` ``(F', S, 2)`` and ``A_ij = d_j u_i`` ``(F', S, 2, 2)`` at ``pos``."""
+        self.flow_index(pos, flows)
+        amp, k = self.amplitude, self.wavenumber
+        sx, sy = torch.sin(k * pos).unbind(-1)
+        cx, cy = torch.cos(k * pos).unbind(-1)
+        u = amp * torch.stack((sx * cy, -cx * sy), -1)
+        cc, ss = amp * k * cx * cy, amp * k * sx * sy
+        grad = torch.stack((torch.stack((cc, -ss), -1), torch.stack((ss, -cc), -1)), -2)
+        return u, grad

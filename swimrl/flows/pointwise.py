@@ -1,0 +1,106 @@
+r"""Flows evaluated at the swimmers' positions, without a grid, in 2D or 3D.
+
+A :class:`PointFlow` gives, for ``F`` flow realisations and ``S`` points in each,
+
+``u_i(x, t)``  ``(F, S, d)``  and  ``A_ij(x, t) = d_j u_i(x, t)``  ``(F, S, d, d)``,
+
+both analytic (no interpolation): the analytic flows of :mod:`swimrl.flows.analytic` and
+the random-Fourier-mode 3D stochastic flow of :mod:`swimrl.flows.stochastic3d`. Each flow
+keeps its own time ``t`` (``(F,)``, float64) and its reference scales ``u_rms`` (the total
+rms ``<u.u>^{1/2}``, ``None`` where the flow has none) and ``tau_k = <A_ij A_ij>^{-1/2}``,
+the conventions of the 2D flows (:mod:`swimrl.flows.stochastic`). The 2D swimmer's five
+channels follow from ``(u, A)`` by :func:`channels_2d`.
+"""
+
+from __future__ import annotations
+
+import torch
+
+
+def channels_2d(u: torch.Tensor, grad: torch.Tensor) -> torch.Tensor:
+    """The five 2D channels ``(u_x, u_y, S_xx, S_xy, omega)`` of :data:`swimrl.flows.base.CHANNELS`
+    from ``u`` ``(..., 2)`` and ``A_ij = d_j u_i`` ``(..., 2, 2)``:
+    ``S_xx = A_xx``, ``S_xy = (A_xy + A_yx)/2``, ``omega = A_yx - A_xy``
+    (incompressible: ``S_yy = A_yy = -S_xx``)."""
+    return torch.stack((u[..., 0], u[..., 1], grad[..., 0, 0],
+                        0.5 * (grad[..., 0, 1] + grad[..., 1, 0]),
+                        grad[..., 1, 0] - grad[..., 0, 1]), -1)
+
+
+def vorticity(grad: torch.Tensor) -> torch.Tensor:
+    """``omega_i = eps_ijk d_j u_k`` of a 3D gradient ``A_ij = d_j u_i`` ``(..., 3, 3)``:
+    ``(A_zy - A_yz, A_xz - A_zx, A_yx - A_xy)``."""
+    return torch.stack((grad[..., 2, 1] - grad[..., 1, 2], grad[..., 0, 2] - grad[..., 2, 0],
+                        grad[..., 1, 0] - grad[..., 0, 1]), -1)
+
+
+class PointFlow:
+    """Base class: ``n_flows`` realisations of a flow evaluated at points.
+
+    Subclasses set :attr:`dim`, :attr:`u_rms` and :attr:`tau_k` and implement
+    :meth:`sample`; a time-dependent or random one extends :meth:`advance` and
+    :meth:`reset` (which here only move and zero the clock).
+
+    Parameters
+    ----------
+    n_flows
+        ``F``, the realisations.
+    device, dtype
+        Where and in which precision the fields are evaluated (times are float64).
+    """
+
+    #: Space dimension ``d`` (2 or 3).
+    dim: int = 3
+    #: Reference velocity: ``<u.u>^{1/2}`` (all components), ``None`` for a flow without one.
+    u_rms: float | None = 1.0
+    #: Kolmogorov time ``<A_ij A_ij>^{-1/2}`` (the 2D flows' convention).
+    tau_k: float = 1.0
+
+    def __init__(self, n_flows: int, device: torch.device | str, dtype: torch.dtype):
+        self.n_flows = int(n_flows)
+        self.device = torch.device(device)
+        self.dtype = dtype
+        self.time = torch.zeros(self.n_flows, device=self.device, dtype=torch.float64)
+
+    # -- interface for subclasses -------------------------------------------------------------
+    def sample(self, pos: torch.Tensor, flows: torch.Tensor | None = None
+               ) -> tuple[torch.Tensor, torch.Tensor]:  # pragma: no cover - abstract
+        """``(u, A)`` at ``pos`` ``(F', S, d)`` in the flows ``flows`` (indices ``(F',)``,
+        all flows if None): ``u`` ``(F', S, d)``, ``A_ij = d_j u_i`` ``(F', S, d, d)``."""
+        raise NotImplementedError
+
+    def advance(self, dt: float) -> None:
+        """Move every flow from ``t`` to ``t + dt``."""
+        self.time += dt
+
+    def reset(self, flows: torch.Tensor | None = None) -> None:
+        """New realisations where ``flows`` (bool ``(F,)``) is true (all if None): here the
+        clock is set to 0."""
+        if flows is None:
+            self.time.zero_()
+        else:
+            self.time[flows] = 0.0
+
+    # -- shared -------------------------------------------------------------------------------
+    def velocity(self, pos: torch.Tensor, flows: torch.Tensor | None = None) -> torch.Tensor:
+        """``u(x, t)`` ``(F', S, d)`` at ``pos`` ``(F', S, d)`` (see :meth:`sample`)."""
+        return self.sample(pos, flows)[0]
+
+    def velocity_gradient(self, pos: torch.Tensor, flows: torch.Tensor | None = None
+                          ) -> torch.Tensor:
+        """``A_ij = d_j u_i`` ``(F', S, d, d)`` at ``pos`` ``(F', S, d)`` (see :meth:`sample`)."""
+        return self.sample(pos, flows)[1]
+
+    def flow_index(self, pos: torch.Tensor, flows: torch.Tensor | None) -> torch.Tensor:
+        """The flows' indices ``(F',)`` (``arange(F)`` if None), checked against ``pos``."""
+        if flows is None:
+            flows = torch.arange(self.n_flows, device=self.device)
+        flows = torch.as_tensor(flows, device=self.device).reshape(-1)
+        if pos.dim() != 3 or pos.shape[-1] != self.dim or pos.shape[0] != flows.numel():
+            raise ValueError(f"positions of shape {tuple(pos.shape)}: expected "
+                             f"({flows.numel()}, S, {self.dim}) (flows, points, dimension)")
+        return flows
+
+    def times(self, flows: torch.Tensor) -> torch.Tensor:
+        """The flows' times ``(F', 1)`` in float64."""
+        return self.time[flows].unsqueeze(-1)

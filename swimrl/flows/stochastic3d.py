@@ -1,0 +1,273 @@
+r"""The paper's stochastic flow carried to 3D, as random Fourier modes at the swimmers.
+
+Units: ``ell_f = u_rms = 1``, with ``u_rms = <u.u>^{1/2}`` the rms of the whole velocity
+vector (the 2D flow's default ``velocity_scale="total"``; one component has rms
+``u_rms / sqrt(3)``), so ``tau_f = Ku ell_f / u_rms = Ku``.
+
+Model. ``u = curl a``, ``a(x, t) = sum_{i=1..M} c_i(t) a_i(x)``, each ``a_i`` a vector of
+three independent Gaussian fields with ``<a_i^p(x) a_j^q(x')> = delta_ij delta_pq B
+exp(-r^2 / 2 ell^2)``, ``r = |x - x'|``, ``B = u_rms^2 ell^2 / 6``, and the coefficients of
+the 2D flow: ``<c_i(t) c_j(t')> = delta_ij / M exp(-|t - t'| / tau_f)``. ``u`` is
+incompressible, Gaussian given the ``c_i`` (as in 2D), statistically homogeneous and
+isotropic, with (``f = exp(-r^2 / 2 ell^2)``)
+
+``R_ij(r) = <u_i(x) u_j(x + r)> = (u_rms^2 / 3) f [(1 - r^2 / 2 ell^2) delta_ij
++ r_i r_j / 2 ell^2]``  (:func:`velocity_covariance`):
+
+longitudinal correlation ``R_LL(r) / R_LL(0) = exp(-r^2 / 2 ell^2)``, the Gaussian
+correlation of length ``ell_f`` (the same as the 2D flow's: there, too, the velocity's
+longitudinal correlation is the stream function's Gaussian). Moments (derivatives of ``R``
+at 0; ``<A_ij A_kl> = -d_j d_l R_ik(0)``, :func:`gradient_covariance`):
+
+* ``<u_i u_j> = delta_ij u_rms^2 / 3``, ``<u.u> = u_rms^2``;
+* ``<A_ij A_kl> = (u_rms^2 / 6 ell^2)(4 delta_ik delta_jl - delta_ij delta_kl
+  - delta_il delta_jk)`` (the isotropic incompressible form; its contraction with
+  ``delta_ij`` vanishes: ``tr A = 0``); ``<A_ij A_ij> = 5 u_rms^2 / ell^2``,
+  ``<A_ij A_ji> = 0``, so ``<S_ij S_ij> = <O_ij O_ij> = 5/2`` and ``<|omega|^2> = 5``;
+* ``tau_K = <A_ij A_ij>^{-1/2} = ell_f / (sqrt(5) u_rms) = 0.447`` (the 2D flow's
+  definition, ``tau_K = ell_f / (2 u_rms)`` there; here it equals ``(2 <S_ij S_ij>)^{-1/2}``,
+  the turbulence ``(nu / epsilon)^{1/2}``).
+
+Representation (why not a grid: the paper's ``h = ell_f / 40`` on a ``10 ell_f`` box is
+``400^3 x M x 12`` values; a coarse grid would add an interpolation error to the gradients
+that the swimmer reads). Each ``a_i`` is a sum of ``K`` random Fourier modes,
+
+``a_i(x) = sqrt(B / K) sum_{n=1..K} [xi_n cos(k_n.x) + eta_n sin(k_n.x)]``,
+``k_n ~ N(0, I / ell^2)``, ``xi_n, eta_n ~ N(0, I_3)``,
+
+so ``u = sum_{i,n} c_i [P_n cos(k_n.x) + Q_n sin(k_n.x)]`` with ``P_n = sqrt(B/K) k_n x eta_n``
+and ``Q_n = -sqrt(B/K) k_n x xi_n``, and ``A_ij = sum c_i [Q_i cos - P_i sin] k_j``
+analytically; ``k_n . P_n = k_n . Q_n = 0``, so ``div u = tr A = 0`` to round-off, mode by
+mode. The wavevectors are drawn per realisation (with ``basis="redrawn"``). Its error:
+
+* Over realisations (wavevectors, amplitudes, ``c_i``) every second moment above is exact
+  for any ``K`` (``E[cos(k.r)] = exp(-r^2 / 2 ell^2)`` for ``k ~ N(0, I/ell^2)``).
+* One realisation is Gaussian given its wavevectors, with the covariance
+  ``B K^{-1} sum_n cos(k_n.r)`` per component of ``a_i``: exact at ``r = 0``, with a random
+  error of std ``B (1 - f(r)^2) / sqrt(2K)`` (at most ``0.088 B`` for ``K = 64``). Its space
+  averages are the mode sums (:meth:`StochasticFlow3D.realisation_moments`): per component
+  field, ``<u.u>`` has a relative spread ``sqrt(1.5/K)`` (0.15) and ``<A_ij A_ij>``
+  ``sqrt(5.3/K)`` (0.29) about 1 and 5; the ``c_i`` spread ``sum_i c_i^2`` far more
+  (``sqrt(2/M) = 0.63``, as in 2D).
+* The one-point law over realisations is a Gaussian scale mixture: a velocity component has
+  excess kurtosis ``6/M + 9/(M K)``; ``6/M`` comes from the ``c_i`` (the 2D flow has it
+  too), ``9/(MK) = 0.028`` (``M = 5``, ``K = 64``) from the modes; Gaussian as ``K``
+  grows.
+
+Defaults: ``M = 5`` (the paper's), ``K = 64`` modes per component (``M K = 320`` per
+realisation: the per-realisation spread of the flow's energy from the modes is a quarter of
+that from the ``c_i``; the cost is a ``(S, 3) x (3, MK)`` and two ``(S, MK) x (MK, 12)``
+products per evaluation). The field is unbounded, not periodic: no box, no periodic images
+(the 2D box adds images, ``< 2 e^{-12.5}`` in the covariance), positions need no wrapping;
+phases ``k.x`` are evaluated in the flow's dtype (float32: an absolute phase error about
+``6e-8 |k| |x|``, ``2e-5`` at ``|x| = 100 ell_f``).
+
+OU update (exact for any step, as in 2D): ``c(t+dt) = c e^{-dt/tau_f} +
+sqrt((1 - e^{-2dt/tau_f}) / M) xi``; ``c(0) ~ N(0, 1/M)``.
+
+``basis="redrawn"`` (default) draws new wavevectors and amplitudes with every realisation
+(:meth:`~StochasticFlow3D.reset`); ``"fixed"`` draws one set from its own generator seeded
+with ``basis_seed`` and gives it to every realisation, which then differ only by ``c_i``
+(the ensemble moments then hold on average over ``basis_seed``, as in 2D).
+
+Not yet offered by ``build_flow`` and the configs: the flow registry wires it in (and moves
+the defaults ``N_MODES``, ``N_WAVES`` to ``conf/flow/``).
+"""
+
+from __future__ import annotations
+
+import math
+
+import torch
+
+from swimrl.conf_values import yaml_value
+from swimrl.errors import as_float, as_int, one_of
+from swimrl.flows.pointwise import PointFlow
+from swimrl.flows.stochastic import OUCoefficients
+
+#: Kolmogorov time ``<A_ij A_ij>^{-1/2}`` in units ``ell_f / u_rms`` (module docstring).
+TAU_K = 1.0 / math.sqrt(5.0)
+#: Default ``M``, the OU components (the paper's, as the 2D flow's ``n_modes``).
+N_MODES = 5
+#: Default ``K``, random Fourier modes per component.
+N_WAVES = 64
+#: Options of ``basis`` (first = default), as the 2D flow's.
+BASIS_MODES = ("redrawn", "fixed")
+
+
+def potential_amplitude(ell: float = 1.0, u_rms: float = 1.0) -> float:
+    """``B = u_rms^2 ell^2 / 6``: the variance of one component of ``a_i`` that gives
+    ``<u.u> = 6 B / ell^2 = u_rms^2``."""
+    return u_rms**2 * ell**2 / 6.0
+
+
+def velocity_covariance(r: torch.Tensor, ell: float = 1.0, u_rms: float = 1.0) -> torch.Tensor:
+    """``R_ij(r) = <u_i(x) u_j(x + r)> = (u_rms^2/3) f [(1 - r^2/2ell^2) delta_ij
+    + r_i r_j / 2ell^2]``, ``f = exp(-r^2 / 2 ell^2)``, for separations ``r`` ``(..., 3)``:
+    ``(..., 3, 3)``."""
+    s = (r * r).sum(-1, keepdim=True).unsqueeze(-1) / ell**2           # (..., 1, 1)
+    eye = torch.eye(3, dtype=r.dtype, device=r.device)
+    rr = r.unsqueeze(-1) * r.unsqueeze(-2) / (2 * ell**2)
+    return (u_rms**2 / 3) * torch.exp(-0.5 * s) * ((1 - 0.5 * s) * eye + rr)
+
+
+def gradient_covariance(ell: float = 1.0, u_rms: float = 1.0,
+                        dtype: torch.dtype = torch.float64) -> torch.Tensor:
+    """``<A_ij A_kl> = (u_rms^2 / 6 ell^2)(4 delta_ik delta_jl - delta_ij delta_kl
+    - delta_il delta_jk)`` at one point, indexed ``[i, j, k, l]`` ``(3, 3, 3, 3)``."""
+    d = torch.eye(3, dtype=dtype)
+    e = torch.einsum
+    form = 4 * e("ik,jl->ijkl", d, d) - e("ij,kl->ijkl", d, d) - e("il,jk->ijkl", d, d)
+    return u_rms**2 / (6 * ell**2) * form
+
+
+class StochasticFlow3D(OUCoefficients, PointFlow):
+    """``n_flows`` realisations of the 3D stochastic flow at Kubo number ``kubo``.
+
+    Each realisation has ``M`` potential components of ``K`` modes each (module docstring)
+    and its coefficients ``c_i``; :meth:`reset` redraws both for the selected flows (with
+    ``basis="fixed"``: only the ``c_i``). Bad values raise :class:`~swimrl.errors.ConfigError`
+    naming ``flow.<keyword>``.
+
+    Attributes: :attr:`wavevectors` ``(R, MK, 3)``; the velocity amplitudes
+    :attr:`amp_cos` (``P_n``) and :attr:`amp_sin` (``Q_n``) and the potential's
+    :attr:`pot_cos` (``sqrt(B/K) xi_n``) and :attr:`pot_sin` (``sqrt(B/K) eta_n``), all
+    ``(R, MK, 3)``, mode ``n`` belonging to component ``n // K``; ``R = F`` (redrawn) or 1
+    (fixed); :attr:`coeffs` ``(F, M)``.
+    """
+
+    dim = 3
+    u_rms = 1.0
+    ell_f = 1.0
+    tau_k = TAU_K
+
+    def __init__(
+        self,
+        n_flows: int,
+        kubo: float,
+        n_modes: int = N_MODES,
+        n_waves: int = N_WAVES,
+        device: torch.device | str = yaml_value("evaluate", "device"),
+        dtype: torch.dtype = torch.float32,
+        generator: torch.Generator | None = None,
+        basis: str = BASIS_MODES[0],
+        basis_seed: int = 0,
+    ):
+        self.kubo = as_float("flow.kubo", kubo, lambda f: f > 0, "> 0")
+        self.n_basis = as_int("flow.n_modes", n_modes)
+        self.n_waves = as_int("flow.n_waves", n_waves)
+        self.basis_mode = one_of("flow.basis", basis, BASIS_MODES)
+        seed = as_int("flow.basis_seed", basis_seed, low=0)
+        super().__init__(n_flows, device, dtype)
+        self.tau_f = self.kubo * self.ell_f / self.u_rms
+        self.generator = generator
+        n = self.n_basis * self.n_waves
+        rows = 1 if self.basis_mode == "fixed" else self.n_flows
+        shape = (rows, n, 3)
+        self.wavevectors = torch.zeros(shape, device=self.device, dtype=dtype)
+        self.pot_cos = torch.zeros(shape, device=self.device, dtype=dtype)
+        self.pot_sin = torch.zeros(shape, device=self.device, dtype=dtype)
+        self.amp_cos = torch.zeros(shape, device=self.device, dtype=dtype)
+        self.amp_sin = torch.zeros(shape, device=self.device, dtype=dtype)
+        self.coeffs = torch.zeros(self.n_flows, self.n_basis, device=self.device, dtype=dtype)
+        if self.basis_mode == "fixed":
+            own = torch.Generator(device=self.device).manual_seed(seed)
+            self._draw_modes(torch.zeros(1, dtype=torch.long, device=self.device), own)
+        self.reset()
+
+    # -- drawing ------------------------------------------------------------------------------
+    def _randn(self, *shape: int, dtype=None, generator=None) -> torch.Tensor:
+        return torch.randn(*shape, device=self.device, dtype=dtype or self.dtype,
+                           generator=generator or self.generator)
+
+    def _draw_modes(self, rows: torch.Tensor, generator: torch.Generator | None) -> None:
+        """New wavevectors ``k ~ N(0, I/ell^2)`` and amplitudes ``xi, eta ~ N(0, I)`` of the
+        basis ``rows``, drawn in float64, stored in the flow's dtype."""
+        f64, n = torch.float64, self.wavevectors.shape[1]
+        count = rows.numel()
+        k = self._randn(count, n, 3, dtype=f64, generator=generator) / self.ell_f
+        xi = self._randn(count, n, 3, dtype=f64, generator=generator)
+        eta = self._randn(count, n, 3, dtype=f64, generator=generator)
+        scale = math.sqrt(potential_amplitude(self.ell_f, self.u_rms) / self.n_waves)
+        self.wavevectors[rows] = k.to(self.dtype)
+        self.pot_cos[rows] = (scale * xi).to(self.dtype)
+        self.pot_sin[rows] = (scale * eta).to(self.dtype)
+        self.amp_cos[rows] = (scale * torch.linalg.cross(k, eta)).to(self.dtype)
+        self.amp_sin[rows] = (-scale * torch.linalg.cross(k, xi)).to(self.dtype)
+
+    def reset(self, flows: torch.Tensor | None = None) -> None:
+        """Redraw the modes (unless fixed) and ``c_i(0) ~ N(0, 1/M)`` of the flows where
+        ``flows`` (bool ``(F,)``) is true (all if None); their clocks start at 0."""
+        if flows is None:
+            idx = torch.arange(self.n_flows, device=self.device)
+        else:
+            idx = torch.as_tensor(flows, device=self.device).nonzero().flatten()
+        if idx.numel() == 0:
+            return
+        if self.basis_mode == "redrawn":
+            self._draw_modes(idx, self.generator)
+        self.coeffs[idx] = self._randn(idx.numel(), self.n_basis) / math.sqrt(self.n_basis)
+        self.time[idx] = 0.0
+
+
+    # -- evaluation ---------------------------------------------------------------------------
+    def _modes(self, flows: torch.Tensor, coeffs: torch.Tensor | None):
+        """Per-mode weights ``c_{n // K}`` ``(F', MK, 1)`` and the basis tensors of ``flows``
+        (broadcast over flows for a fixed basis)."""
+        c = (self.coeffs if coeffs is None else coeffs)[flows]
+        w = c.repeat_interleave(self.n_waves, dim=-1).unsqueeze(-1)
+        if self.wavevectors.shape[0] == 1:
+            return w, self.wavevectors, self.amp_cos, self.amp_sin, self.pot_cos, self.pot_sin
+        return (w, self.wavevectors[flows], self.amp_cos[flows], self.amp_sin[flows],
+                self.pot_cos[flows], self.pot_sin[flows])
+
+    def sample(self, pos: torch.Tensor, flows: torch.Tensor | None = None,
+               coeffs: torch.Tensor | None = None) -> tuple[torch.Tensor, torch.Tensor]:
+        """``u`` ``(F', S, 3)`` and ``A_ij = d_j u_i`` ``(F', S, 3, 3)`` at ``pos``
+        ``(F', S, 3)`` in ``flows`` (all if None), with the current coefficients (or
+        ``coeffs`` ``(F, M)``):
+
+        ``u = sum_n w_n (P_n cos k_n.x + Q_n sin k_n.x)``,
+        ``A_ij = sum_n w_n (Q_ni cos k_n.x - P_ni sin k_n.x) k_nj``.
+        """
+        flows = self.flow_index(pos, flows)
+        w, k, p, q, _, _ = self._modes(flows, coeffs)
+        phase = pos @ k.transpose(-1, -2)                               # (F', S, MK)
+        cos, sin = torch.cos(phase), torch.sin(phase)
+        p, q = w * p, w * q                                             # (F', MK, 3)
+        pk = (p.unsqueeze(-1) * k.unsqueeze(-2)).flatten(-2)           # (F', MK, 9)
+        qk = (q.unsqueeze(-1) * k.unsqueeze(-2)).flatten(-2)
+        u = cos @ p + sin @ q
+        grad = (cos @ qk - sin @ pk).unflatten(-1, (3, 3))
+        return u, grad
+
+    def velocity(self, pos: torch.Tensor, flows: torch.Tensor | None = None) -> torch.Tensor:
+        """``u`` alone (no gradient products), ``(F', S, 3)``."""
+        flows = self.flow_index(pos, flows)
+        w, k, p, q, _, _ = self._modes(flows, None)
+        phase = pos @ k.transpose(-1, -2)
+        return torch.cos(phase) @ (w * p) + torch.sin(phase) @ (w * q)
+
+    def vector_potential(self, pos: torch.Tensor, flows: torch.Tensor | None = None
+                         ) -> torch.Tensor:
+        """``a = sum_i c_i a_i(x)`` ``(F', S, 3)``, whose curl is :meth:`velocity`."""
+        flows = self.flow_index(pos, flows)
+        w, k, _, _, xi, eta = self._modes(flows, None)
+        phase = pos @ k.transpose(-1, -2)
+        return torch.cos(phase) @ (w * xi) + torch.sin(phase) @ (w * eta)
+
+    def realisation_moments(self) -> tuple[torch.Tensor, torch.Tensor]:
+        """Space averages ``<u.u>`` and ``<A_ij A_ij>`` of each flow at its current ``c``,
+        ``(F,)`` float64: the mode sums ``sum_n w_n^2 (|P_n|^2 + |Q_n|^2)/2`` and the same
+        with ``|k_n|^2`` (exact for distinct wavevectors, i.e. almost surely)."""
+        flows = torch.arange(self.n_flows, device=self.device)
+        w, k, p, q, _, _ = self._modes(flows, None)
+        energy = 0.5 * (w.double().squeeze(-1) ** 2) * ((p.double() ** 2).sum(-1)
+                                                         + (q.double() ** 2).sum(-1))
+        return energy.sum(-1), (energy * (k.double() ** 2).sum(-1)).sum(-1)
+
+    def measured_stats(self) -> dict[str, float]:
+        """Averages over all flows of the space averages: ``u_rms = <u.u>^{1/2}``,
+        ``tau_K = <A_ij A_ij>^{-1/2}`` (the 2D flow's :meth:`measured_stats`)."""
+        u2, a2 = self.realisation_moments()
+        return {"u_rms": u2.mean().item() ** 0.5, "tau_K": a2.mean().item() ** -0.5}
