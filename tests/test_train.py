@@ -660,7 +660,7 @@ def test_parallel_preset_is_long_floor05_with_the_swimmer_parallel_layout():
     assert plan.gradient_steps_per_update == 32 and c.train.epochs == 4
     assert (plan.lr_actor, plan.lr_critic) == pytest.approx(
         (3e-3 * math.sqrt(8192 / 2560), 1e-3 * math.sqrt(8192 / 2560)), rel=1e-12)
-    assert plan.frames_per_batch == 64 * 64 * 16 == c.train.frames_per_batch
+    assert c.train.frames_per_batch == 64 * 64 * 16
     for key in ("n_flows", "n_swimmers", "rollout_length", "minibatch_size", "eval_every"):
         par.train[key] = ref.train[key]
     par.optim.lr_scale = ref.optim.lr_scale
@@ -710,6 +710,7 @@ def test_a_checkpoint_config_from_before_rollout_length_upgrades_to_the_same_bat
     new = upgrade_config(old)
     assert new["train"] == now["train"]
     assert (new["optim"]["lr_scale"], new["optim"]["lr_actor"]) == ("none", 5.4e-3)
-    plan = make_plan(train_config(OmegaConf.create(new)))
-    assert (plan.frames_per_batch, plan.rollout_steps) == (65536, 16)
+    tc = train_config(OmegaConf.create(new))
+    plan = make_plan(tc)
+    assert (tc.train.frames_per_batch, plan.rollout_steps) == (65536, 16)
     assert (plan.lr_actor, plan.lr_critic) == (5.4e-3, 1.8e-3)

@@ -261,8 +261,6 @@ class TrainPlan:
 
     rollout_steps: int
     """``L = train.rollout_length``: decisions of every swimmer per batch."""
-    frames_per_batch: int
-    """``n_flows x n_swimmers x L``: frames per update."""
     n_updates: int
     """``total_frames // frames_per_batch``."""
     total_frames: int
@@ -283,9 +281,9 @@ class TrainPlan:
 
 
 def make_plan(cfg: TrainConfig) -> TrainPlan:
-    """Derived sizes: ``frames_per_batch = F S L``, ``n_updates = total // frames_per_batch``,
-    minibatches per epoch (default: a full pass), the learning rates, and the training and
-    evaluation seeds."""
+    """Derived sizes: ``n_updates = total // frames_per_batch`` (``F S L``, a property of the
+    settings), minibatches per epoch (default: a full pass), the learning rates, and the
+    training and evaluation seeds."""
     t = cfg.train
     fpb = t.frames_per_batch
     n_updates = t.total_frames // fpb
@@ -293,7 +291,6 @@ def make_plan(cfg: TrainConfig) -> TrainPlan:
     lr_actor, lr_critic = cfg.optim.rates_for(t.minibatch_size)
     return TrainPlan(
         rollout_steps=t.rollout_length,
-        frames_per_batch=fpb,
         n_updates=n_updates,
         total_frames=n_updates * fpb,
         minibatches_per_epoch=n_mb,

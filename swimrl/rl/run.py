@@ -180,7 +180,7 @@ def _train_locked(cfg: TrainConfig, plan: TrainPlan, out: Path) -> dict | None:
         "PPO: %d updates x %d frames (%d flows x %d swimmers x %d decisions), %d epochs x %d "
         "minibatches of %d; Adam %.3g / %.3g; reward scale %.4g; %.1f episodes of %d swimmers",
         plan.n_updates,
-        plan.frames_per_batch,
+        t.frames_per_batch,
         t.n_flows,
         t.n_swimmers,
         plan.rollout_steps,
