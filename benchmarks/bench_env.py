@@ -16,6 +16,10 @@ and the seconds of the first (warm-up) interval, where ``compiled`` compiles.
     python benchmarks/bench_env.py --threads 1 --batches 64x64 --kernels fused compiled
     python benchmarks/bench_env.py --device cuda --batches 256x64 --kernels eager compiled
     python benchmarks/bench_env.py --smoke          # a tiny grid and batch, seconds
+    python benchmarks/bench_env.py --flow stochastic3d --threads 1 --batches 512x8 64x8
+
+``--flow stochastic3d``: the 3D stochastic flow (random Fourier modes evaluated at the
+swimmers, ``--n-waves`` per component; the eager kernel only).
 """
 
 from __future__ import annotations
@@ -27,6 +31,8 @@ import torch
 
 from swimrl.env import EnvParams, SwimmerEnv
 from swimrl.flows.stochastic import StochasticFlow
+from swimrl.flows.stochastic3d import StochasticFlow3D
+from swimrl.physics.signals3d import SIGNAL_NAMES_3D
 
 DEFAULT_BATCHES = ["1x1000", "10x100", "10x1000", "100x100", "1x10000", "10x10000", "1x100000"]
 #: The GPU floor's batch (docs/training.md, issue 46): train_preset=parallel_gpu, 16 384 swimmers.
@@ -45,9 +51,15 @@ def measure(flows: int, swimmers: int, kernel: str, args) -> dict:
     """Best swimmer-substeps/s, ms per interval and ms per env step over the repeats (after one
     warm-up interval and one warm-up env step)."""
     gen = torch.Generator(device=args.device).manual_seed(0)
-    flow = StochasticFlow(flows, args.kubo, n_grid=args.n_grid, spacing=args.spacing,
-                          device=args.device, generator=gen)
-    env = SwimmerEnv(flow, swimmers, EnvParams(), kernel=kernel)
+    if args.flow == "stochastic3d":
+        flow = StochasticFlow3D(flows, args.kubo, n_waves=args.n_waves, device=args.device,
+                                generator=gen)
+        env = SwimmerEnv.build_from(flow, swimmers, EnvParams(signals=SIGNAL_NAMES_3D),
+                                    kernel=kernel)
+    else:
+        flow = StochasticFlow(flows, args.kubo, n_grid=args.n_grid, spacing=args.spacing,
+                              device=args.device, generator=gen)
+        env = SwimmerEnv(flow, swimmers, EnvParams(), kernel=kernel)
     td = env.reset()
     td.set("action", torch.full(env.action_spec.shape, 0.98, device=args.device))
     lam = torch.full((flows * swimmers,), 0.98, device=args.device)
@@ -80,6 +92,8 @@ def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
     p.add_argument("--device", default="cpu")
     p.add_argument("--threads", type=int, default=2)
     p.add_argument("--kubo", type=float, default=10.0)
+    p.add_argument("--flow", default="stochastic", choices=("stochastic", "stochastic3d"))
+    p.add_argument("--n-waves", type=int, default=64, help="stochastic3d: modes per component")
     p.add_argument("--batches", nargs="*", default=None,
                    help=f"FLOWSxSWIMMERS (default: {' '.join(DEFAULT_BATCHES)}; the GPU floor's "
                         f"batch of 16384 swimmers is {GPU_FLOOR_BATCH})")
@@ -106,7 +120,9 @@ def main(argv: list[str] | None = None) -> list[dict]:
     dev = torch.cuda.get_device_name() if args.device.startswith("cuda") else "cpu"
     k = EnvParams().n_substeps
     print(f"# device={args.device} ({dev}) threads={args.threads} torch={torch.__version__} "
-          f"Ku={args.kubo:g} K={k} substeps per interval, grid {args.n_grid} x {args.spacing:g}; "
+          f"flow={args.flow} Ku={args.kubo:g} K={k} substeps per interval, "
+          + (f"{args.n_waves} modes per component; " if args.flow == "stochastic3d" else
+             f"grid {args.n_grid} x {args.spacing:g}; ") +
           f"best of {args.repeats} x {args.intervals} intervals")
     print(f"{'batch':>10} {'swimmers':>9} {'kernel':>8} {'substeps/s':>11} {'ms/interval':>12} "
           f"{'ms/env step':>12} {'warm-up s':>10}")
@@ -115,6 +131,8 @@ def main(argv: list[str] | None = None) -> list[dict]:
         flows, swimmers = (int(v) for v in b.split("x"))
         for kernel in args.kernels:
             if kernel == "fused" and not args.device.startswith("cpu"):
+                continue
+            if args.flow == "stochastic3d" and kernel != "eager":
                 continue
             r = measure(flows, swimmers, kernel, args)
             rows.append({"batch": b, "kernel": kernel, **r})

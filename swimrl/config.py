@@ -25,7 +25,7 @@ import typing
 from collections.abc import Mapping
 from pathlib import Path
 
-from omegaconf import DictConfig, ListConfig, OmegaConf
+from omegaconf import DictConfig, OmegaConf
 
 from swimrl.analysis.fit_minimal import FitConfig, read_coefficients
 from swimrl.analysis.gain_scan import GainScanConfig
@@ -33,17 +33,13 @@ from swimrl.env import EnvParams
 from swimrl.errors import ConfigError, number_type, one_of
 from swimrl.evaluation.compare import CompareConfig, strategy_variants
 from swimrl.evaluation.rollout import EvalConfig
-from swimrl.flows.build import (
-    FLOWS,
-    FlowSpec,
-    LiveDNSSpec,
-    StochasticSpec,
-    StoredRunSpec,
-    live_dns_params,
-)
+from swimrl.flows.build import FlowSpec
 from swimrl.flows.dns.params import DNSParams
 from swimrl.flows.dns.run import DNSRun
 from swimrl.flows.labels import ku_name
+from swimrl.flows.registry import flow_dimension, flow_entry, flow_names
+from swimrl.physics.signals import SIGNAL_NAMES
+from swimrl.physics.signals3d import SIGNAL_NAMES_3D
 from swimrl.policies.baselines import StrategySpec
 from swimrl.policies.networks import ModelSpec
 from swimrl.rl.plan import LossSettings, OptimSettings, TrainConfig, TrainSettings
@@ -58,6 +54,25 @@ OmegaConf.register_new_resolver("flow_tag", ku_name, replace=True)
 #: (``ku${ku:${flow.kubo}}``: names of policies and records per Ku)
 OmegaConf.register_new_resolver("ku", lambda kubo: ku_name(float(kubo)).removeprefix("ku"),
                                 replace=True)
+
+
+
+def all_signals(flow) -> list[str]:
+    """``${all_signals:${flow}}`` (``conf/signals/all.yaml``): every signal of the flow's
+    dimension (:data:`~swimrl.physics.signals.SIGNAL_NAMES` or
+    :data:`~swimrl.physics.signals3d.SIGNAL_NAMES_3D`); the 2D set for a flow name that is
+    not registered (the flow's own check names it)."""
+    node = OmegaConf.to_container(flow, resolve=True) if isinstance(flow, DictConfig) else flow
+    if str(node.get("name")) not in flow_names():
+        return list(SIGNAL_NAMES)
+    try:
+        dim = flow_dimension(node)
+    except (ConfigError, KeyError, TypeError, ValueError):
+        dim = 2
+    return list(SIGNAL_NAMES_3D if dim == 3 else SIGNAL_NAMES)
+
+
+OmegaConf.register_new_resolver("all_signals", all_signals, replace=True)
 
 
 def _int(value):
@@ -132,20 +147,14 @@ def env_params(cfg: DictConfig) -> EnvParams:
 
 
 def flow_spec(flow: DictConfig, rt: Runtime) -> FlowSpec:
-    """The ``flow`` group (``flow=stochastic | dns_replay | dns``)."""
-    one_of("flow.name", flow.name, FLOWS)
-    if flow.name == "stochastic":
-        return from_node(StochasticSpec, {"flow.": flow})
-    if flow.name == "dns_replay":
-        paths = flow.path if isinstance(flow.path, ListConfig | list | tuple) else [flow.path]
-        return from_node(StoredRunSpec, {"flow.": flow},
-                         paths=tuple(Path(str(p)) for p in paths))
-    return from_node(
-        LiveDNSSpec, {"flow.": flow},
-        dns=live_dns_params(OmegaConf.to_container(flow.dns), rt.device, rt.dtype),
-        spinup_time=_float(flow.spinup.time),
-        measure_time=_float(flow.spinup.measure_time),
-    )
+    """The ``flow`` group (``flow=<name>``, any flow of :mod:`swimrl.flows.registry`): its
+    spec from the ``flow.*`` keys by field name, the fields its entry makes from several
+    keys (``given``) from the node as plain containers."""
+    entry = flow_entry(str(flow.name))
+    given = {}
+    if entry.given is not None:
+        given = entry.given(OmegaConf.to_container(flow, resolve=True), rt.device, rt.dtype)
+    return from_node(entry.spec, {"flow.": flow}, **given)
 
 
 def eval_sizes(node: DictConfig) -> EvalSizes:

@@ -44,12 +44,16 @@ from torchrl.data import Bounded, Categorical, Composite, Unbounded
 from torchrl.envs import EnvBase
 
 from swimrl.conf_values import yaml_value
-from swimrl.errors import ConfigError, IntegrityError, as_float, keep_number_types
+from swimrl.errors import ConfigError, IntegrityError, as_float, keep_number_types, one_of
 from swimrl.flows.base import GriddedFlow
 from swimrl.flows.build import FlowSpec, build_flow
+from swimrl.flows.pointwise import PointFlow, channels_2d
 from swimrl.physics.energy import drag_factor
 from swimrl.physics.integrator import select_kernel
-from swimrl.physics.signals import compute_signals, signal_indices
+from swimrl.physics.signals import SIGNAL_NAMES, compute_signals, signal_indices
+from swimrl.physics.signals3d import SIGNAL_NAMES_3D, compute_signals_3d
+from swimrl.physics.swimmer import heun_step
+from swimrl.physics.swimmer3d import channels_from_gradient, heun_step_3d
 from swimrl.runtime import Runtime
 from swimrl.task import RewardSpec, TaskSpec
 
@@ -115,7 +119,7 @@ class EnvParams:
     update_interval: float = yaml_value("evaluate", "episode.update_interval")
     dt: float = yaml_value("evaluate", "episode.dt")
     shape_factor_max: float = yaml_value("evaluate", "swimmer.shape_factor_max")
-    signals: tuple[str, ...] = yaml_value("signals/all", "names")
+    signals: tuple[str, ...] = SIGNAL_NAMES
     task: TaskSpec = TaskSpec()
     reward: RewardSpec = RewardSpec()
     n_substeps: int = field(init=False)
@@ -131,7 +135,7 @@ class EnvParams:
                  lambda v: 0 < v <= self.duration, f"in (0, episode.duration={self.duration}]")
         as_float("swimmer.shape_factor_max", self.shape_factor_max, lambda v: 0 < v < 1,
                  "in (0, 1)")
-        signal_indices(self.signals)
+        signal_indices(self.signals, tuple(dict.fromkeys(SIGNAL_NAMES + SIGNAL_NAMES_3D)))
         object.__setattr__(
             self,
             "n_substeps",
@@ -224,12 +228,19 @@ class SwimmerEnv(EnvBase):
         if self.generator is None:
             self.generator = torch.Generator(device=flow.device)
         self.flow.generator = self.generator
-        self._obs_idx = signal_indices(params.signals)
-        self._kernel = select_kernel(kernel, flow.device)
+        #: The space dimension (2 for every gridded flow).
+        self.dim = int(getattr(flow, "dim", 2))
+        #: The signals of the ``signals`` key (all of this dimension), in order.
+        self.signal_names = SIGNAL_NAMES_3D if self.dim == 3 else SIGNAL_NAMES
+        try:
+            self._obs_idx = signal_indices(params.signals, self.signal_names)
+        except ConfigError as err:
+            raise ConfigError(f"{err} (the flow is {self.dim}D)") from None
+        self._kernel = self._select_kernel(kernel, flow.device)
         dtype = flow.dtype
         # physical units of the flow
         self.tau_k = flow.tau_k
-        self.swim_speed = params.swim_speed * flow.u_rms
+        self.swim_speed = params.swim_speed * self.velocity_unit(flow)
         self.dt = params.dt * flow.tau_k
         self.rot_kick_std = math.sqrt(2 * params.rot_diffusion / flow.tau_k * self.dt)
         self.reference_distance = self.swim_speed * params.duration * flow.tau_k  # v_s T
@@ -240,16 +251,17 @@ class SwimmerEnv(EnvBase):
         self.decision_length = self.swim_speed * params.update_interval * flow.tau_k  # v_s T_u
         dev = flow.device
         self._flow_index = torch.arange(flow.n_flows, device=dev).repeat_interleave(n_swimmers)
-        self.pos = torch.zeros(batch + (2,), device=dev, dtype=dtype)
-        self.image = torch.zeros(batch + (2,), device=dev, dtype=torch.int64)
+        d = self.dim
+        self.pos = torch.zeros(batch + (d,), device=dev, dtype=dtype)
+        self.image = torch.zeros(batch + (d,), device=dev, dtype=torch.int64)
         self.start_pos = torch.zeros_like(self.pos)
         self.start_image = torch.zeros_like(self.image)
         self.theta = torch.zeros(batch, device=dev, dtype=dtype)
         self.step_count = torch.zeros(batch, device=dev, dtype=torch.int64)
         #: Decisions since each flow's last reset, ``(F,)``: the clock that truncates episodes.
         self.flow_step = torch.zeros(flow.n_flows, device=dev, dtype=torch.int64)
-        #: ``X - x_0`` of each swimmer's target (``task=target``), ``(F, S, 2)``.
-        self.target = torch.zeros(batch + (2,), device=dev, dtype=dtype)
+        #: ``X - x_0`` of each swimmer's target (``task=target``), ``(F, S, d)``.
+        self.target = torch.zeros(batch + (d,), device=dev, dtype=dtype)
         #: Arrived swimmers and the decision at which they arrived (-1: not yet).
         self.arrived = torch.zeros(batch, device=dev, dtype=torch.bool)
         self.arrival_step = torch.full(batch, -1, device=dev, dtype=torch.int64)
@@ -266,7 +278,7 @@ class SwimmerEnv(EnvBase):
         self.action_spec = Bounded(low=-lam, high=lam, shape=batch + (1,), device=dev, dtype=dtype)
         self.observation_spec = Composite(
             observation=Unbounded(shape=batch + (len(self._obs_idx),), device=dev, dtype=dtype),
-            signals=Unbounded(shape=batch + (5,), device=dev, dtype=dtype),
+            signals=Unbounded(shape=batch + (len(self.signal_names),), device=dev, dtype=dtype),
             distance=Unbounded(shape=batch + (1,), device=dev, dtype=dtype),
             shape=batch,
             device=dev,
@@ -329,10 +341,18 @@ class SwimmerEnv(EnvBase):
         realisations = build_flow(
             flow, n_flows, device, dtype, gen, params.update_interval, params.duration
         )
-        env = cls(realisations, n_swimmers, params, generator=gen, kernel=runtime.kernel,
-                  ic_blocks=ic_blocks)
+        env = cls.build_from(realisations, n_swimmers, params, generator=gen,
+                             kernel=runtime.kernel, ic_blocks=ic_blocks)
         env._clock_offset = offset
         return env
+
+    @classmethod
+    def build_from(cls, flow, n_swimmers: int, params: EnvParams, **kwargs) -> SwimmerEnv:
+        """The environment of a flow already built: a :class:`SwimmerEnv` for a
+        :class:`~swimrl.flows.base.GriddedFlow`, a :class:`PointSwimmerEnv` for a
+        :class:`~swimrl.flows.pointwise.PointFlow` (``kwargs``: the constructor's)."""
+        env_cls = PointSwimmerEnv if cls is SwimmerEnv and isinstance(flow, PointFlow) else cls
+        return env_cls(flow, n_swimmers, params, **kwargs)
 
     def stagger(self, groups: int) -> None:
         """Offset the episodes of ``groups`` groups of flows (flow ``f`` in group ``f mod
@@ -346,9 +366,31 @@ class SwimmerEnv(EnvBase):
                                            self._flows.device)
 
     # -- state helpers ------------------------------------------------------------------------
+    @staticmethod
+    def velocity_unit(flow) -> float:
+        """The unit of ``swimmer.swim_speed``: the flow's ``u_rms``."""
+        return flow.u_rms
+
+    def _select_kernel(self, kernel: str, device: torch.device):
+        """The integration function (:func:`~swimrl.physics.integrator.select_kernel`)."""
+        return select_kernel(kernel, device)
+
     @property
     def n_swimmers(self) -> int:
         return self.batch_size[1]
+
+    def state(self) -> tuple[torch.Tensor, ...]:
+        """The tensors an arrived swimmer keeps (``task=target``): position, image counts and
+        orientation."""
+        return self.pos, self.image, self.theta
+
+    def length_resolution(self) -> float:
+        """The flow's smallest resolved length (the grid spacing), for float tolerances."""
+        return self.flow.grid.spacing
+
+    def start_position(self) -> torch.Tensor:
+        """The unwrapped start ``x_0 = p_0 + L m_0``, ``(F, S, d)``."""
+        return self.start_pos + self.flow.grid.length * self.start_image.to(self.pos.dtype)
 
     def displacement(self) -> torch.Tensor:
         """The unwrapped displacement from the start ``x - x_0 = (p - p_0) + L (m - m_0)``.
@@ -484,37 +526,48 @@ class SwimmerEnv(EnvBase):
                 self._clock_offset = None
         k = int(mask.sum())
         if k:
-            g, dev, dt = self.generator, self.device, self.pos.dtype
             blocks = self.ic_blocks
             if blocks > 1 and not bool((mask == flows.unsqueeze(1)).all()):
                 raise ValueError("ic_blocks > 1 needs whole-flow resets")
             n = k // blocks  # swimmers drawn; each block of a flow gets the same draws
-            new_pos = torch.rand(n, 2, generator=g, device=dev, dtype=dt) * self.flow.grid.length
-            new_theta = torch.rand(n, generator=g, device=dev, dtype=dt) * (2 * math.pi)
-            angle = None
-            if self.task.target:  # X - x_0 = D (cos phi, sin phi)
-                angle = torch.rand(n, generator=g, device=dev, dtype=dt) * (2 * math.pi)
+            new_pos, new_orient, new_target = self._draw_starts(n)
             if blocks > 1:
                 per_block = self.n_swimmers // blocks
-                new_pos = new_pos.view(-1, 1, per_block, 2).expand(-1, blocks, -1, -1)
-                new_pos = new_pos.reshape(k, 2)
-                new_theta = new_theta.view(-1, 1, per_block).expand(-1, blocks, -1).reshape(k)
-                if angle is not None:
-                    angle = angle.view(-1, 1, per_block).expand(-1, blocks, -1).reshape(k)
+
+                def repeat(x: torch.Tensor) -> torch.Tensor:
+                    x = x.view(-1, 1, per_block, *x.shape[1:])
+                    return x.expand(-1, blocks, *x.shape[2:]).reshape(k, *x.shape[3:])
+
+                new_pos, new_orient = repeat(new_pos), repeat(new_orient)
+                if new_target is not None:
+                    new_target = repeat(new_target)
             self.pos[mask] = new_pos
             self.start_pos[mask] = new_pos
             self.image[mask] = 0
             self.start_image[mask] = 0
-            self.theta[mask] = new_theta
+            self.state()[2][mask] = new_orient
             self.step_count[mask] = 0
-            if angle is not None:
-                self.target[mask] = self.target_distance * torch.stack(
-                    (torch.cos(angle), torch.sin(angle)), -1)
+            if new_target is not None:
+                self.target[mask] = new_target
             self.arrived[mask] = False
             self.arrival_step[mask] = -1
             self.energy[mask] = 0
             self.last_action[mask] = math.nan
         return self._observe()
+
+    def _draw_starts(self, n: int) -> tuple[torch.Tensor, torch.Tensor, torch.Tensor | None]:
+        """``n`` new swimmers: positions uniform in the box ``[0, L)^2``, angles uniform in
+        ``[0, 2 pi)`` and (``task=target``) targets ``X - x_0 = D (cos phi, sin phi)``,
+        ``phi`` uniform, drawn in this order from the environment's generator."""
+        g, dev, dt = self.generator, self.device, self.pos.dtype
+        new_pos = torch.rand(n, 2, generator=g, device=dev, dtype=dt) * self.flow.grid.length
+        new_theta = torch.rand(n, generator=g, device=dev, dtype=dt) * (2 * math.pi)
+        target = None
+        if self.task.target:
+            angle = torch.rand(n, generator=g, device=dev, dtype=dt) * (2 * math.pi)
+            target = self.target_distance * torch.stack((torch.cos(angle), torch.sin(angle)),
+                                                        -1)
+        return new_pos, new_theta, target
 
     def _step(self, tensordict: TensorDictBase) -> TensorDictBase:
         lam_max = self.params.shape_factor_max
@@ -540,12 +593,11 @@ class SwimmerEnv(EnvBase):
         rho_before = (self.target - self.displacement()).norm(dim=-1)
         # the arrived swimmers' state put back after the interval, with no branch on whether
         # there are any (a branch on a tensor value would wait for the device)
-        frozen = (self.pos.clone(), self.image.clone(), self.theta.clone())
+        frozen = [x.clone() for x in self.state()]
         self.integrate(action)
-        keep = self.arrived.unsqueeze(-1)
-        self.pos.copy_(torch.where(keep, frozen[0], self.pos))
-        self.image.copy_(torch.where(keep, frozen[1], self.image))
-        self.theta.copy_(torch.where(self.arrived, frozen[2], self.theta))
+        for x, old in zip(self.state(), frozen, strict=True):
+            keep = self.arrived.view(*self.batch_size, *([1] * (x.dim() - 2)))
+            x.copy_(torch.where(keep, old, x))
         self.step_count += 1
         self.flow_step += 1
         rho = (self.target - self.displacement()).norm(dim=-1)
@@ -624,7 +676,7 @@ class SwimmerEnv(EnvBase):
         t = self.step_count.to(self.pos.dtype) * (self.params.update_interval * self.tau_k)
         bound = (self.swim_speed + self.max_flow_speed).unsqueeze(1) * t
         dist = self.displacement().norm(dim=-1)
-        bad = ~(dist <= bound * (1 + slack) + 1e-6 * self.flow.grid.spacing)
+        bad = ~(dist <= bound * (1 + slack) + 1e-6 * self.length_resolution())
         if bool(bad.any()):
             excess = torch.where(bad, dist / bound.clamp_min(1e-30), torch.zeros_like(dist))
             excess = excess.nan_to_num(nan=math.inf)
@@ -641,3 +693,152 @@ class SwimmerEnv(EnvBase):
         if seed is None:
             seed = int(torch.empty((), dtype=torch.int64).random_().item())
         self.generator.manual_seed(int(seed))
+
+
+class PointSwimmerEnv(SwimmerEnv):
+    r"""The swimmers of :class:`SwimmerEnv` in a flow evaluated at their positions
+    (:class:`~swimrl.flows.pointwise.PointFlow`: the analytic flows and the 3D stochastic
+    flow), in 2D or 3D; made by :meth:`SwimmerEnv.build` for such a flow.
+
+    The flow is unbounded: positions are not wrapped (the image counts stay 0), swimmers start
+    uniformly in the cube ``[0, flow.start_box)^d`` (at the origin for a linear flow). In 2D
+    the state and the signals are those of :class:`SwimmerEnv` (the angle ``theta``, the five
+    signals of :mod:`swimrl.physics.signals`, channels from ``(u, A)`` by
+    :func:`~swimrl.flows.pointwise.channels_2d`); in 3D the orientation is the unit vector
+    :attr:`orientation` ``n`` ``(F, S, 3)``, started uniform on the sphere, integrated by
+    :func:`~swimrl.physics.swimmer3d.heun_step_3d`
+    (``dn/dt = omega x n / 2 + Lambda (S n - (n.S n) n)``), the signals the seven of
+    :mod:`swimrl.physics.signals3d` and a target's direction uniform on the sphere. Every
+    decision integrates ``T_u / dt`` Heun steps eagerly (``kernel=auto|eager``).
+    """
+
+    def __init__(self, flow: PointFlow, n_swimmers: int, params: EnvParams,
+                 generator: torch.Generator | None = None,
+                 kernel: str = yaml_value("evaluate", "kernel"), ic_blocks: int = 1):
+        super().__init__(flow, n_swimmers, params, generator=generator, kernel=kernel,
+                         ic_blocks=ic_blocks)
+        #: Unit orientations ``n`` in 3D, ``(F, S, 3)`` (2D: :attr:`theta`).
+        self.orientation = torch.zeros(self.batch_size + (3,), device=self.device,
+                                       dtype=self.pos.dtype)
+
+    @staticmethod
+    def velocity_unit(flow) -> float:
+        """``u_rms`` of the flow, or ``ell_f / tau_K`` for a flow without one (linear)."""
+        return flow.u_rms if flow.u_rms is not None else flow.ell_f / flow.tau_k
+
+    def _select_kernel(self, kernel: str, device: torch.device):
+        one_of("kernel", kernel, ("auto", "eager"))
+        return None
+
+    def state(self) -> tuple[torch.Tensor, ...]:
+        return (self.pos, self.image, self.orientation if self.dim == 3 else self.theta)
+
+    def displacement(self) -> torch.Tensor:
+        """``x - x_0`` ``(F, S, d)``: positions are not wrapped."""
+        return self.pos - self.start_pos
+
+    def start_position(self) -> torch.Tensor:
+        return self.start_pos
+
+    def length_resolution(self) -> float:
+        return self.flow.ell_f
+
+    def _wrap(self) -> None:
+        """Nothing: the flow is unbounded."""
+
+    def _draw_starts(self, n: int) -> tuple[torch.Tensor, torch.Tensor, torch.Tensor | None]:
+        """Positions uniform in ``[0, start_box)^d``; angles uniform (2D) or orientations
+        uniform on the sphere (3D, normalised Gaussian vectors); targets at distance ``D`` in a
+        uniform direction; drawn in this order."""
+        g, dev, dt, d = self.generator, self.device, self.pos.dtype, self.dim
+        box = float(self.flow.start_box)
+        pos = torch.rand(n, d, generator=g, device=dev, dtype=dt) * box
+
+        def direction() -> torch.Tensor:
+            v = torch.randn(n, 3, generator=g, device=dev, dtype=dt)
+            return v / v.norm(dim=-1, keepdim=True)
+
+        if d == 3:
+            orient = direction()
+        else:
+            orient = torch.rand(n, generator=g, device=dev, dtype=dt) * (2 * math.pi)
+        target = None
+        if self.task.target:
+            if d == 3:
+                target = self.target_distance * direction()
+            else:
+                angle = torch.rand(n, generator=g, device=dev, dtype=dt) * (2 * math.pi)
+                target = self.target_distance * torch.stack((angle.cos(), angle.sin()), -1)
+        return pos, orient, target
+
+    def _channels(self, pos: torch.Tensor) -> torch.Tensor:
+        """The flow channels at ``pos`` ``(F, S, d)``: the five 2D ones or the eleven of
+        :data:`~swimrl.physics.swimmer3d.CHANNELS_3D`, ``(F, S, c)``."""
+        u, grad = self.flow.sample(pos)
+        return channels_from_gradient(u, grad) if self.dim == 3 else channels_2d(u, grad)
+
+    def _channels_flat(self, pos: torch.Tensor) -> torch.Tensor:
+        """The 2D channels at ``pos`` ``(F S, 2)``, ``(F S, 5)``."""
+        return self._channels(pos.view(*self.batch_size, 2)).view(-1, 5)
+
+    def signals(self, displacement: torch.Tensor | None = None) -> torch.Tensor:
+        """All signals of the dimension (:attr:`signal_names`) in the task's frame."""
+        q = self._channels(self.pos)
+        frame = self.frame(displacement)
+        if self.dim == 3:
+            return compute_signals_3d(q, self.orientation, frame, self.tau_k)
+        return compute_signals(q, self.theta, frame, self.tau_k)
+
+    def _track_speed(self) -> None:
+        bound = self.flow.speed_bound()
+        if bound is not None:
+            torch.maximum(self.max_flow_speed, bound.to(self.max_flow_speed.dtype),
+                          out=self.max_flow_speed)
+
+    def integrate(self, shape_factor: torch.Tensor) -> None:
+        """``T_u / dt`` Heun steps (:func:`~swimrl.physics.swimmer.heun_step` in 2D,
+        :func:`~swimrl.physics.swimmer3d.heun_step_3d` in 3D), the flow advanced between the
+        stages, ``Lambda`` ``(F * S,)`` held; with rotational diffusion, an angle kick
+        ``sqrt(2 D_r dt) xi`` (2D) or the exact spherical step (3D) each step."""
+        f, s, d = *self.batch_size, self.dim
+        lam = shape_factor.view(f, s)
+        d_r = self.params.rot_diffusion / self.tau_k
+        pos = self.pos
+        orient = self.orientation if d == 3 else self.theta
+        self._track_speed()
+        for _ in range(self.params.n_substeps):
+            noise = None
+            if d_r > 0:
+                shape = (f, s, 3) if d == 3 else (f, s)
+                noise = torch.randn(shape, generator=self.generator, device=self.device,
+                                    dtype=pos.dtype)
+            if d == 3:
+                pos, orient = heun_step_3d(self._channels, self._advance, pos, orient, lam,
+                                           self.swim_speed, self.dt, noise, d_r)
+            else:
+                kick = None if noise is None else self.rot_kick_std * noise.view(-1)
+                flat, angle = heun_step(self._channels_flat, self._advance, pos.view(-1, 2),
+                                        orient.view(-1), lam.view(-1), self.swim_speed,
+                                        self.dt, kick)
+                pos, orient = flat.view(f, s, 2), angle.view(f, s)
+            self._track_speed()
+        self.pos.copy_(pos)
+        if d == 3:
+            self.orientation.copy_(orient)
+        else:
+            self.theta.copy_(torch.remainder(orient, 2 * math.pi))
+
+    def _advance(self) -> None:
+        self.flow.advance(self.dt)
+
+    def check_displacement(self, slack: float = 1e-3) -> None:
+        """:meth:`SwimmerEnv.check_displacement` where the flow bounds its speed; for a flow
+        without a bound (linear), only that every displacement is finite."""
+        if self.flow.speed_bound() is not None:
+            super().check_displacement(slack)
+            return
+        dist = self.displacement().norm(dim=-1)
+        if not bool(torch.isfinite(dist).all()):
+            raise IntegrityError(
+                f"impossible result: {int((~torch.isfinite(dist)).sum())} swimmers have a "
+                "non-finite displacement, nothing written")

@@ -79,6 +79,15 @@ def test_bench_env_smoke(tmp_path):
             positive(value)
 
 
+def test_bench_env_3d_smoke(tmp_path):
+    out = script("bench_env.py", "--smoke", "--threads", "1", "--flow", "stochastic3d",
+                 "--n-waves", "4", "--kernels", "eager", "fused", cwd=tmp_path)
+    _, rows = table(out, "batch")
+    assert [r[:3] for r in rows] == [["2x8", "16", "eager"]], out
+    for value in rows[0][3:6]:
+        positive(value)
+
+
 def test_bench_train_smoke(tmp_path):
     out = script("bench_train.py", "--smoke", "--out", str(tmp_path / "runs"), cwd=tmp_path)
     head, rows = table(out, "variant")

@@ -30,10 +30,12 @@ from swimrl.env import EnvParams, SwimmerEnv
 from swimrl.errors import ConfigError
 from swimrl.evaluation.compare import CompareConfig, strategy_variants
 from swimrl.evaluation.rollout import EvalConfig
+from swimrl.flows.analytic import ABCSpec, LinearSpec, TaylorGreenSpec
 from swimrl.flows.build import LiveDNSSpec, StochasticSpec, StoredRunSpec
 from swimrl.flows.dns.params import DNSParams
 from swimrl.flows.dns.run import DNSRun
 from swimrl.flows.stochastic import StochasticFlow
+from swimrl.flows.stochastic3d import Stochastic3DSpec, StochasticFlow3D
 from swimrl.paper.records import DNSFiguresConfig, FiguresConfig
 from swimrl.policies.baselines import StrategySpec
 from swimrl.policies.networks import ModelSpec, make_mlp, tanh_normal_actor, value_critic
@@ -125,14 +127,17 @@ def reads_the_yaml(expr: ast.expr) -> bool:
 #: Everything whose defaults stand for yaml keys ...
 READ = (StochasticSpec, StoredRunSpec, LiveDNSSpec, StochasticFlow.__init__, DNSParams, DNSRun,
         EnvParams, SwimmerEnv.__init__, TaskSpec, RewardSpec, Runtime, Runtime.from_names,
-        EvalSizes, CompareConfig, strategy_variants, make_mlp, tanh_normal_actor, value_critic)
+        EvalSizes, CompareConfig, strategy_variants, make_mlp, tanh_normal_actor, value_critic,
+        Stochastic3DSpec, LinearSpec, ABCSpec, TaylorGreenSpec)
 #: ... but these, written in Python: library-only keywords (no config sets them), torch
 #: dtypes (the yaml's ``dtype`` is a name), and EnvParams's task and reward (``TaskSpec()``,
 #: ``RewardSpec()``, whose own defaults are read).
 WRITTEN = {
     "StochasticFlow.__init__": ("dtype", "generator"),
     "SwimmerEnv.__init__": ("generator", "ic_blocks"),
-    "EnvParams": ("task", "reward"),
+    # signals: the 2D set SIGNAL_NAMES (conf/signals/all.yaml gives the flow's dimension's set,
+    # an interpolation; test_swimmer_episode_signals_and_runtime checks it composes to this)
+    "EnvParams": ("task", "reward", "signals"),
     "make_mlp": ("out_gain", "device", "dtype"),
     "tanh_normal_actor": ("device", "dtype"),
     "value_critic": ("device", "dtype"),
@@ -154,7 +159,9 @@ def test_yaml_value_reads_one_file_as_hydra_does():
     nu = yaml_value("solver/dns", "dns.nu")
     assert type(nu) is float and nu == _compose("dns").dns.nu
     assert type(yaml_value("solver/dns", "dns.n")) is int
-    assert yaml_value("signals/all", "names") == tuple(_compose("evaluate").signals.names)
+    assert (yaml_value("signals/nr_nth_snp", "names")
+            == tuple(_compose("evaluate", "signals=nr_nth_snp").signals.names))
+    assert yaml_value("signals/all", "names") == "${all_signals:${flow}}"
     assert yaml_value("dns", "store.path") == "data/dns/dns_n${dns.n}_seed${seed}.zarr"
     with pytest.raises(KeyError, match="conf/evaluate.yaml has no key 'eval.absent'"):
         yaml_value("evaluate", "eval.absent")
@@ -183,6 +190,22 @@ def test_stochastic_flow(name):
     assert_defaults_are_the_yaml(StochasticFlow, cfg, "flow.",
                                  keys={"device": "device", "dtype": "dtype"},
                                  library_only=("generator",))
+
+
+@pytest.mark.parametrize("flow,spec", [("stochastic3d", Stochastic3DSpec),
+                                       ("linear", LinearSpec), ("abc", ABCSpec),
+                                       ("taylor_green", TaylorGreenSpec)])
+def test_registered_point_flows(flow, spec):
+    """``conf/flow/<name>.yaml`` of the flows evaluated at points: their specs' defaults."""
+    cfg = _compose("evaluate", f"flow={flow}")
+    if flow == "stochastic3d":
+        assert_defaults_are_the_yaml(spec, cfg, "flow.")
+        assert_defaults_are_the_yaml(StochasticFlow3D.__init__, cfg, "flow.",
+                                     keys={"device": "device"},
+                                     library_only=("dtype", "generator"))
+    else:
+        got = {k: _plain(v) for k, v in defaults(spec).items()}
+        assert got == {k: _plain(v) for k, v in OmegaConf.to_container(cfg.flow).items()}
 
 
 def test_replayed_and_live_dns_flows():

@@ -87,6 +87,7 @@ class CompareConfig:
     def __post_init__(self) -> None:
         for v in self.variants:
             v.strategy.check_bound(self.setup.params.shape_factor_max)
+            v.strategy.check_dimension(self.setup.dimension)
         as_bool("compare.shared_flows", self.shared_flows)
         as_bool("overwrite", self.overwrite)
         as_bool("compare.resume", self.resume)

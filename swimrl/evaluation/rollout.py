@@ -64,6 +64,7 @@ class EvalConfig:
                 "pretrained/NAME>"
             )
         self.strategy.check_bound(self.setup.params.shape_factor_max)
+        self.strategy.check_dimension(self.setup.dimension)
 
 
 #: Bytes per swimmer of state, observations and integration temporaries (an upper estimate).
@@ -216,7 +217,7 @@ def evaluate_shared(setup: RunSpec, actors: Sequence[Actor], desc: str = "eval",
                                chunk_seed(setup.seed, c), ic_blocks=k)
         if router is None:
             spec = env.action_spec_unbatched
-            modules = [build_strategy(a, spec) if isinstance(a, StrategySpec) else a
+            modules = [build_strategy(a, spec, env.dim) if isinstance(a, StrategySpec) else a
                        for a in actors]
             modules = [m.to(setup.runtime.device) for m in modules]
             router = modules[0] if k == 1 else SplitActor(modules, s)

@@ -14,9 +14,13 @@ swimmers and ``N`` decisions; lengths in ``l_f``, times in ``tau_K``, signals as
 
 * ``signals`` ``(F, K, n, N, 5)``, ``Lambda`` ``(F, K, n, N)`` (the action, clamped to
   ``[-Lambda_max, Lambda_max]`` as the environment applies it);
-* ``position`` ``(F, K, n, N+1, 2)``, ``theta`` ``(F, K, n, N+1)``, ``time`` ``(N+1,)``;
-* ``R_hat`` ``(F, K, n)``, ``reference_distance`` ``v_s T``, ``box`` the period ``L``;
-* with ``task=target``: ``target`` ``(F, K, n, 2)`` (the unwrapped target position ``X``),
+* ``position`` ``(F, K, n, N+1, d)``, ``time`` ``(N+1,)``, and the orientation: in 2D
+  ``theta`` ``(F, K, n, N+1)``, in 3D ``orientation`` ``(F, K, n, N+1, 3)`` (the unit vector
+  ``n``; the signals are then the seven of :mod:`swimrl.physics.signals3d`,
+  ``signal_names`` says which);
+* ``R_hat`` ``(F, K, n)``, ``reference_distance`` ``v_s T``, ``box`` the period ``L`` (NaN for
+  an unbounded flow);
+* with ``task=target``: ``target`` ``(F, K, n, d)`` (the unwrapped target position ``X``),
   ``arrival_time`` ``(F, K, n)`` (NaN: not arrived), ``arrival_radius``;
 * with ``field_every = m > 0``: ``vorticity`` ``(frames, n_g, n_g)``, ``omega tau_K`` of the
   first flow on every ``field_stride``-th grid node (``[y, x]``) at decisions ``0, m, 2m,
@@ -57,16 +61,20 @@ class TrajectoryRecorder:
         self._sel = torch.tensor([k * block + i for k in range(n_blocks) for i in range(self.n)],
                                  device=env.device)
         self._shape = (n_blocks, self.n)
-        self._cur = {"signals": [], "Lambda": [], "position": [], "theta": []}
+        self._orient = "orientation" if env.dim == 3 else "theta"
+        self._cur = {"signals": [], "Lambda": [], "position": [], self._orient: []}
+        grid = getattr(env.flow, "grid", None)
         self.meta = {"reference_distance": float(env.reference_distance),
-                     "tau_K": float(env.tau_k), "box": float(env.flow.grid.length),
+                     "tau_K": float(env.tau_k),
+                     "box": float(grid.length) if grid is not None else float("nan"),
+                     "signal_names": np.asarray(env.signal_names),
                      "update_interval": float(env.params.update_interval),
                      "shape_factor_max": float(env.params.shape_factor_max)}
 
     def _field(self, i: int) -> None:
         """Vorticity of the first flow (first chunk only) at decision ``i``."""
         env, k = self._env, self.field_stride
-        if self._chunks or not self.field_every:
+        if self._chunks or not self.field_every or not hasattr(env.flow, "grid_fields"):
             return
         omega = env.flow.grid_fields(torch.zeros(1, dtype=torch.int64), stride=k)[0, ..., 4]
         self._fields.append((omega * env.tau_k).cpu().float().numpy())
@@ -74,10 +82,10 @@ class TrajectoryRecorder:
 
     def _state(self) -> None:
         env, sel = self._env, self._sel
-        start = env.start_pos + env.flow.grid.length * env.start_image.to(env.pos.dtype)
-        x = (start + env.displacement())[:, sel]
+        x = (env.start_position() + env.displacement())[:, sel]
         self._cur["position"].append(x.cpu())
-        self._cur["theta"].append(env.theta[:, sel].cpu())
+        orient = env.orientation if self._orient == "orientation" else env.theta
+        self._cur[self._orient].append(orient[:, sel].cpu())
 
     def __call__(self, i: int, td: TensorDictBase) -> None:
         """Decision ``i``: signals and action (before the step) and the state."""
@@ -100,9 +108,8 @@ class TrajectoryRecorder:
         chunk["R_hat"] = r_hat[:, self._sel].cpu().double().numpy().reshape(shape)
         env = self._env
         if env.task.target:
-            start = env.start_pos + env.flow.grid.length * env.start_image.to(env.pos.dtype)
-            target = (start + env.target)[:, self._sel].cpu().numpy()
-            chunk["target"] = target.reshape(shape + (2,))
+            target = (env.start_position() + env.target)[:, self._sel].cpu().numpy()
+            chunk["target"] = target.reshape(shape + (env.dim,))
             arrival = env.outcomes()["arrival_time"][:, self._sel].cpu().double().numpy()
             chunk["arrival_time"] = arrival.reshape(shape)
             self.meta["arrival_radius"] = float(env.arrival_radius)
@@ -129,7 +136,8 @@ def save_trajectories(arrays: dict[str, np.ndarray], path: Path, strategies: lis
     data = {k: (v.astype(np.float32) if v.dtype.kind == "f" and v.ndim > 2 and k != "R_hat"
                 else v) for k, v in arrays.items()}
     data["strategies"] = np.asarray(strategies)
-    data["signal_names"] = np.asarray(SIGNAL_NAMES)
+    if "signal_names" not in data:
+        data["signal_names"] = np.asarray(SIGNAL_NAMES)
     data["config"] = np.asarray(json.dumps(config))
     return write_npz(data, path)
 

@@ -27,18 +27,24 @@ Each gives ``u(x, t)`` and ``A_ij = d_j u_i`` in closed form at batched position
 * :class:`TaylorGreenFlow` (2D, steady cellular flow):
   ``u = U (sin kx cos ky, -cos kx sin ky)``; ``u_rms = U / sqrt(2)``, ``tau_K = 1/(U k)``.
 
-Not yet offered by ``build_flow`` and the configs (the flow registry wires them in).
+Each is a flow of the registry (:mod:`swimrl.flows.registry`): ``flow=linear``, ``flow=abc``,
+``flow=taylor_green`` (``conf/flow/*.yaml``). Their realisations are identical (the flows
+are deterministic); the swimmers start uniformly in ``[0, start_box)^d`` (one period of the
+periodic flows, the origin of the linear flow).
 """
 
 from __future__ import annotations
 
 import math
 from collections.abc import Iterable, Mapping, Sequence
+from dataclasses import dataclass
 
 import torch
 
-from swimrl.errors import fail, require
+from swimrl.conf_values import yaml_value
+from swimrl.errors import fail, keep_number_types, require
 from swimrl.flows.pointwise import PointFlow
+from swimrl.flows.registry import POINT_KERNELS, FlowEntry, register_flow
 
 #: The config key of the linear flow's matrix, and what it may be.
 GRADIENT_KEY = "flow.gradient"
@@ -97,6 +103,7 @@ class LinearFlow(PointFlow):
     """
 
     u_rms = None
+    start_box = 0.0
 
     def __init__(self, gradient, n_flows: int = 1, device: torch.device | str = "cpu",
                  dtype: torch.dtype = torch.float32):
@@ -159,6 +166,14 @@ class ABCFlow(PointFlow):
         a2 = math.fsum(k * k * e for k, e in energy.items())
         self.u_rms = math.sqrt(u2)
         self.tau_k = a2**-0.5 if a2 > 0 else math.inf
+        self.start_box = 2 * math.pi / min(t[3] for t in self.terms)
+        bound = math.fsum(math.hypot(abs(a) + abs(c), abs(b) + abs(a), abs(c) + abs(b))
+                          for a, b, c, _ in self.terms)
+        self._bound = torch.full((self.n_flows,), bound, device=self.device, dtype=dtype)
+
+    def speed_bound(self) -> torch.Tensor:
+        """``|u| <= sum_terms |(|A| + |C|, |B| + |A|, |C| + |B|)|``, ``(F,)``."""
+        return self._bound
 
     def phase(self, flows: torch.Tensor) -> torch.Tensor:
         """``phi(t) = eps sin(omega t)`` of the flows ``(F', 1)``, computed in float64."""
@@ -206,6 +221,13 @@ class TaylorGreenFlow(PointFlow):
         self.u_rms = abs(self.amplitude) / math.sqrt(2.0)
         rate = abs(self.amplitude) * self.wavenumber
         self.tau_k = 1.0 / rate if rate > 0 else math.inf
+        self.start_box = 2 * math.pi / self.wavenumber
+        self._bound = torch.full((self.n_flows,), abs(self.amplitude), device=self.device,
+                                 dtype=dtype)
+
+    def speed_bound(self) -> torch.Tensor:
+        """``|u| <= |U|``, ``(F,)``."""
+        return self._bound
 
     def sample(self, pos: torch.Tensor, flows: torch.Tensor | None = None
                ) -> tuple[torch.Tensor, torch.Tensor]:
@@ -218,3 +240,78 @@ class TaylorGreenFlow(PointFlow):
         cc, ss = amp * k * cx * cy, amp * k * sx * sy
         grad = torch.stack((torch.stack((cc, -ss), -1), torch.stack((ss, -cc), -1)), -2)
         return u, grad
+
+
+# -- the registry's entries (flow=linear | abc | taylor_green) ---------------------------------
+@dataclass(frozen=True)
+class LinearSpec:
+    """``flow=linear``: ``u = A x`` with ``A`` = ``flow.gradient`` (2x2 or 3x3, traceless,
+    not zero: ``tau_K = (A_ij A_ij)^{-1/2}`` is the time unit). Defaults from
+    ``conf/flow/linear.yaml``."""
+
+    gradient: tuple = yaml_value("flow/linear", "gradient")
+    name: str = yaml_value("flow/linear", "name")
+
+    def __post_init__(self) -> None:
+        matrix = check_gradient(self.gradient)
+        require(any(v != 0 for r in matrix for v in r), GRADIENT_KEY, _plain(self.gradient),
+                "a non-zero matrix (tau_K = (A_ij A_ij)^-1/2 is the unit of time)")
+        object.__setattr__(self, "gradient", matrix)
+
+
+@dataclass(frozen=True)
+class ABCSpec:
+    """``flow=abc``: superposed, optionally phase-modulated ABC flows (:class:`ABCFlow`).
+    Defaults from ``conf/flow/abc.yaml``."""
+
+    terms: tuple = yaml_value("flow/abc", "terms")
+    modulation: float = yaml_value("flow/abc", "modulation")
+    frequency: float = yaml_value("flow/abc", "frequency")
+    name: str = yaml_value("flow/abc", "name")
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "terms", _check_terms(self.terms))
+        for key in ("modulation", "frequency"):
+            value = getattr(self, key)
+            require(not isinstance(value, bool) and math.isfinite(_number(value)),
+                    f"flow.{key}", value, "a finite number")
+        keep_number_types(self)
+
+
+@dataclass(frozen=True)
+class TaylorGreenSpec:
+    """``flow=taylor_green``: the steady 2D cellular flow (:class:`TaylorGreenFlow`).
+    Defaults from ``conf/flow/taylor_green.yaml``."""
+
+    amplitude: float = yaml_value("flow/taylor_green", "amplitude")
+    wavenumber: float = yaml_value("flow/taylor_green", "wavenumber")
+    name: str = yaml_value("flow/taylor_green", "name")
+
+    def __post_init__(self) -> None:
+        amp, k = _number(self.amplitude), _number(self.wavenumber)
+        require(math.isfinite(amp) and amp != 0, "flow.amplitude", self.amplitude,
+                "a finite non-zero number")
+        require(math.isfinite(k) and k > 0, "flow.wavenumber", self.wavenumber,
+                "a finite number > 0")
+        keep_number_types(self)
+
+
+def _linear_dimension(flow) -> int:
+    return len(flow["gradient"] if isinstance(flow, Mapping) else flow.gradient)
+
+
+register_flow(FlowEntry(
+    "linear", LinearSpec,
+    lambda spec, n, device, dtype, generator, interval, duration:
+    LinearFlow(spec.gradient, n, device, dtype), _linear_dimension,
+    kernels=POINT_KERNELS))
+register_flow(FlowEntry(
+    "abc", ABCSpec,
+    lambda spec, n, device, dtype, generator, interval, duration:
+    ABCFlow(n, spec.terms, spec.modulation, spec.frequency, device, dtype), 3,
+    kernels=POINT_KERNELS))
+register_flow(FlowEntry(
+    "taylor_green", TaylorGreenSpec,
+    lambda spec, n, device, dtype, generator, interval, duration:
+    TaylorGreenFlow(n, spec.amplitude, spec.wavenumber, device, dtype), 2,
+    kernels=POINT_KERNELS))

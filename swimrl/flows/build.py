@@ -1,5 +1,6 @@
-r"""Typed descriptions of the three flows (``flow=stochastic | dns_replay | dns``) and the
-factory that builds ``n_flows`` realisations of one.
+r"""Typed descriptions of the paper's three flows (``flow=stochastic | dns_replay | dns``),
+registered by name (:mod:`swimrl.flows.registry`), and the factory that builds ``n_flows``
+realisations of any registered flow.
 
 Each spec checks its values on construction (one :class:`~swimrl.errors.ConfigError` naming
 the ``flow.*`` key). Replayed flows (a stored run, or a DNS stepped alongside) are
@@ -9,6 +10,7 @@ the run's own ``tau_K``; the stochastic flow has ``tau_K = 0.5`` in units ``ell_
 
 from __future__ import annotations
 
+from collections.abc import Mapping
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -28,6 +30,7 @@ from swimrl.flows.base import GriddedFlow
 from swimrl.flows.dns.params import DNSParams
 from swimrl.flows.dns.spinup import SpinupSchedule
 from swimrl.flows.dns.store import store_status
+from swimrl.flows.registry import FlowEntry, flow_entry, flow_names, register_flow
 from swimrl.flows.replay import ReplayFlow, window_size
 from swimrl.flows.sources import DNSStore, LiveDNS, StoreSet
 from swimrl.flows.stochastic import (
@@ -36,8 +39,6 @@ from swimrl.flows.stochastic import (
     VELOCITY_SCALES,
     StochasticFlow,
 )
-
-FLOWS = ("stochastic", "dns_replay", "dns")
 
 
 @dataclass(frozen=True)
@@ -186,6 +187,8 @@ def key_name(field: str) -> str:
     return {"spinup_time": "spinup.time", "measure_time": "spinup.measure_time"}.get(field, field)
 
 
+#: The paper's flow specs; any registered flow's spec is accepted where a spec is
+#: (:mod:`swimrl.flows.registry`).
 FlowSpec = StochasticSpec | StoredRunSpec | LiveDNSSpec
 
 
@@ -202,18 +205,34 @@ def live_dns_params(solver: dict, device: torch.device, dtype: torch.dtype) -> D
 FLOW_WORK_BYTES = 2**29
 
 
-def flow_table_bytes(spec: FlowSpec, n_flows: int, dtype: torch.dtype, interval: float) -> int:
-    """Bytes the basis of ``n_flows`` realisations of ``spec`` holds: ``R n^2 M 5`` values
-    (``R`` basis rows, ``n^2`` nodes, ``M`` basis fields, 5 channels), plus a decoded-snapshot
-    cache of ``M + 1`` snapshots for stored runs and the solver state (``~12 n^2`` complex128)
-    of every live DNS; ``interval`` is ``T_u`` in units of ``tau_K`` (sets a replay's ``M``)."""
+def flow_table_bytes(spec, n_flows: int, dtype: torch.dtype, interval: float) -> int:
+    """Bytes ``n_flows`` realisations of ``spec`` hold (the flow entry's ``table_bytes``;
+    0 for a flow that declares none); ``interval`` is ``T_u`` in units of ``tau_K``."""
+    entry = flow_entry(spec.name)
+    return 0 if entry.table_bytes is None else entry.table_bytes(spec, n_flows, dtype, interval)
+
+
+def _stochastic_bytes(spec: StochasticSpec, n_flows: int, dtype: torch.dtype,
+                      interval: float) -> int:
+    """``F n^2 M 5`` values: the basis of ``n_flows`` realisations."""
     size = torch.empty((), dtype=dtype).element_size()
-    if isinstance(spec, StochasticSpec):
-        return n_flows * spec.n_grid**2 * spec.n_modes * 5 * size
-    if isinstance(spec, LiveDNSSpec):
-        n = spec.dns.n
-        window = window_size(interval, spec.interval_tau_k)
-        return n_flows * n * n * (window * 5 * size + 12 * 16)
+    return n_flows * spec.n_grid**2 * spec.n_modes * 5 * size
+
+
+def _live_dns_bytes(spec: LiveDNSSpec, n_flows: int, dtype: torch.dtype,
+                    interval: float) -> int:
+    """A decoded-snapshot cache of ``M + 1`` snapshots and the solver state (``~12 n^2``
+    complex128) per live DNS."""
+    size = torch.empty((), dtype=dtype).element_size()
+    n = spec.dns.n
+    window = window_size(interval, spec.interval_tau_k)
+    return n_flows * n * n * (window * 5 * size + 12 * 16)
+
+
+def _stored_bytes(spec: StoredRunSpec, n_flows: int, dtype: torch.dtype,
+                  interval: float) -> int:
+    """A decoded-snapshot cache of ``M + 1`` snapshots per basis row of a replay."""
+    size = torch.empty((), dtype=dtype).element_size()
     store = DNSStore(Path(spec.path), decode_n=spec.decode_n)
     window = window_size(interval * store.tau_k, store.dt_store)
     rows = -(-n_flows // spec.flows_per_start)
@@ -221,20 +240,22 @@ def flow_table_bytes(spec: FlowSpec, n_flows: int, dtype: torch.dtype, interval:
 
 
 def build_flow(
-    spec: FlowSpec,
+    spec,
     n_flows: int,
     device: torch.device,
     dtype: torch.dtype,
     generator: torch.Generator,
     interval: float,
     duration: float,
-) -> GriddedFlow:
-    """``n_flows`` realisations of ``spec``.
+):
+    """``n_flows`` realisations of ``spec``, by its registered builder
+    (:mod:`swimrl.flows.registry`).
 
     Parameters
     ----------
     spec
-        The flow: :class:`StochasticSpec`, :class:`StoredRunSpec` or :class:`LiveDNSSpec`.
+        The flow: :class:`StochasticSpec`, :class:`StoredRunSpec`, :class:`LiveDNSSpec` or
+        any registered flow's spec.
     n_flows
         Independent realisations (the environment's first batch dimension).
     device, dtype
@@ -246,17 +267,27 @@ def build_flow(
 
     Returns
     -------
-    GriddedFlow
-        The flow (:class:`~swimrl.flows.stochastic.StochasticFlow` or
-        :class:`~swimrl.flows.replay.ReplayFlow`), its realisations drawn.
+    GriddedFlow or PointFlow
+        The flow (:class:`~swimrl.flows.stochastic.StochasticFlow`,
+        :class:`~swimrl.flows.replay.ReplayFlow`, a
+        :class:`~swimrl.flows.pointwise.PointFlow`, ...), its realisations drawn.
     """
+    return flow_entry(spec.name).build(spec, n_flows, device, dtype, generator, interval,
+                                       duration)
+
+
+def _build_stochastic(spec: StochasticSpec, n_flows, device, dtype, generator, interval,
+                      duration) -> GriddedFlow:
+    return StochasticFlow(
+        n_flows, spec.kubo, spec.n_modes, spec.n_grid, spec.spacing, device=device,
+        dtype=dtype, generator=generator, basis=spec.basis, basis_seed=spec.basis_seed,
+        amplitudes=spec.amplitudes, velocity_scale=spec.velocity_scale,
+    )
+
+
+def _build_replay(spec: StoredRunSpec | LiveDNSSpec, n_flows, device, dtype, generator,
+                  interval, duration) -> GriddedFlow:
     common = {"device": device, "dtype": dtype, "generator": generator}
-    if isinstance(spec, StochasticSpec):
-        return StochasticFlow(
-            n_flows, spec.kubo, spec.n_modes, spec.n_grid, spec.spacing, **common,
-            basis=spec.basis, basis_seed=spec.basis_seed, amplitudes=spec.amplitudes,
-            velocity_scale=spec.velocity_scale,
-        )
     if isinstance(spec, LiveDNSSpec):
         seeds = torch.randint(0, 2**31 - 1, (n_flows,), generator=generator, device=device)
         source = LiveDNS(
@@ -270,3 +301,31 @@ def build_flow(
     tau_k = source.tau_k
     return ReplayFlow(source, n_flows, interval * tau_k, duration * tau_k, **common,
                       flows_per_start=per_start)
+
+
+def _stored_given(node: Mapping, device, dtype) -> dict:
+    """``flow.path``: one store or a list of them."""
+    paths = node["path"] if isinstance(node["path"], list | tuple) else [node["path"]]
+    return {"paths": tuple(Path(str(p)) for p in paths)}
+
+
+def _live_given(node: Mapping, device, dtype) -> dict:
+    """``flow.dns.*`` on the run's device and dtype, and ``flow.spinup.*``."""
+    spinup = node["spinup"]
+    return {"dns": live_dns_params(dict(node["dns"]), device, dtype),
+            "spinup_time": spinup["time"], "measure_time": spinup["measure_time"]}
+
+
+register_flow(FlowEntry("stochastic", StochasticSpec, _build_stochastic, 2,
+                        table_bytes=_stochastic_bytes))
+register_flow(FlowEntry("dns_replay", StoredRunSpec, _build_replay, 2, given=_stored_given,
+                        table_bytes=_stored_bytes))
+register_flow(FlowEntry("dns", LiveDNSSpec, _build_replay, 2, given=_live_given,
+                        table_bytes=_live_dns_bytes))
+
+
+def __getattr__(name: str):
+    """``FLOWS``: the registered flows' names (:func:`~swimrl.flows.registry.flow_names`)."""
+    if name == "FLOWS":
+        return flow_names()
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")

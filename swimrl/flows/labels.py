@@ -38,7 +38,10 @@ def _kubo_or_name(flow: Mapping | float | str) -> float | str:
 
 def ku_name(flow: Mapping | float | str) -> str:
     """``ku0.1``, ``ku1``, ``ku10``, ``ku1e7``: the one machine label of a Kubo number (or of
-    a stochastic flow's config; another flow's config or name gives the name)."""
+    a stochastic flow's config; another flow's config with a ``kubo`` gives
+    ``<name>_ku<Ku>``, ``stochastic3d_ku10``; one without, or a name, gives the name)."""
+    if isinstance(flow, Mapping) and flow["name"] != "stochastic" and "kubo" in flow:
+        return f"{flow['name']}_{ku_name(float(flow['kubo']))}"
     kubo = _kubo_or_name(flow)
     if isinstance(kubo, str):
         return kubo

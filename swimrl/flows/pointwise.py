@@ -14,6 +14,8 @@ channels follow from ``(u, A)`` by :func:`channels_2d`.
 
 from __future__ import annotations
 
+import math
+
 import torch
 
 
@@ -55,6 +57,12 @@ class PointFlow:
     u_rms: float | None = 1.0
     #: Kolmogorov time ``<A_ij A_ij>^{-1/2}`` (the 2D flows' convention).
     tau_k: float = 1.0
+    #: The flow length (units of ``task.distance``): the flow's own length scale.
+    ell_f: float = 1.0
+    #: Swimmers start uniformly in ``[0, start_box)^d`` (units of the flow's length).
+    start_box: float = 10.0
+    #: The random generator of a random flow (set by the environment; None: not random).
+    generator: torch.Generator | None = None
 
     def __init__(self, n_flows: int, device: torch.device | str, dtype: torch.dtype):
         self.n_flows = int(n_flows)
@@ -100,6 +108,16 @@ class PointFlow:
             raise ValueError(f"positions of shape {tuple(pos.shape)}: expected "
                              f"({flows.numel()}, S, {self.dim}) (flows, points, dimension)")
         return flows
+
+    def speed_bound(self) -> torch.Tensor | None:
+        """An upper bound of ``max_x |u(x, t)|`` of each flow now, ``(F,)``; None where the
+        flow has none (a linear flow: ``|u|`` grows with ``|x|``)."""
+        return None
+
+    def measured_stats(self) -> dict[str, float]:
+        """The reference scales ``u_rms`` (NaN for a flow without one) and ``tau_K``."""
+        return {"u_rms": math.nan if self.u_rms is None else float(self.u_rms),
+                "tau_K": float(self.tau_k)}
 
     def times(self, flows: torch.Tensor) -> torch.Tensor:
         """The flows' times ``(F', 1)`` in float64."""

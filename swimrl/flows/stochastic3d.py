@@ -70,27 +70,29 @@ sqrt((1 - e^{-2dt/tau_f}) / M) xi``; ``c(0) ~ N(0, 1/M)``.
 with ``basis_seed`` and gives it to every realisation, which then differ only by ``c_i``
 (the ensemble moments then hold on average over ``basis_seed``, as in 2D).
 
-Not yet offered by ``build_flow`` and the configs: the flow registry wires it in (and moves
-the defaults ``N_MODES``, ``N_WAVES`` to ``conf/flow/``).
+``flow=stochastic3d`` (:class:`Stochastic3DSpec`, ``conf/flow/stochastic3d.yaml``) builds it
+through the flow registry (:mod:`swimrl.flows.registry`).
 """
 
 from __future__ import annotations
 
 import math
+from dataclasses import dataclass
 
 import torch
 
 from swimrl.conf_values import yaml_value
-from swimrl.errors import as_float, as_int, one_of
+from swimrl.errors import as_float, as_int, keep_number_types, one_of
 from swimrl.flows.pointwise import PointFlow
+from swimrl.flows.registry import POINT_KERNELS, FlowEntry, register_flow
 from swimrl.flows.stochastic import OUCoefficients
 
 #: Kolmogorov time ``<A_ij A_ij>^{-1/2}`` in units ``ell_f / u_rms`` (module docstring).
 TAU_K = 1.0 / math.sqrt(5.0)
 #: Default ``M``, the OU components (the paper's, as the 2D flow's ``n_modes``).
-N_MODES = 5
+N_MODES: int = yaml_value("flow/stochastic3d", "n_modes")
 #: Default ``K``, random Fourier modes per component.
-N_WAVES = 64
+N_WAVES = yaml_value("flow/stochastic3d", "n_waves")
 #: Options of ``basis`` (first = default), as the 2D flow's.
 BASIS_MODES = ("redrawn", "fixed")
 
@@ -150,8 +152,8 @@ class StochasticFlow3D(OUCoefficients, PointFlow):
         device: torch.device | str = yaml_value("evaluate", "device"),
         dtype: torch.dtype = torch.float32,
         generator: torch.Generator | None = None,
-        basis: str = BASIS_MODES[0],
-        basis_seed: int = 0,
+        basis: str = yaml_value("flow/stochastic3d", "basis"),
+        basis_seed: int = yaml_value("flow/stochastic3d", "basis_seed"),
     ):
         self.kubo = as_float("flow.kubo", kubo, lambda f: f > 0, "> 0")
         self.n_basis = as_int("flow.n_modes", n_modes)
@@ -169,6 +171,11 @@ class StochasticFlow3D(OUCoefficients, PointFlow):
         self.pot_sin = torch.zeros(shape, device=self.device, dtype=dtype)
         self.amp_cos = torch.zeros(shape, device=self.device, dtype=dtype)
         self.amp_sin = torch.zeros(shape, device=self.device, dtype=dtype)
+        #: ``[P_n, Q_n (x) k_n]`` over ``[Q_n, -P_n (x) k_n]`` ``(R, 2MK, 12)``: ``(u, A)`` is
+        #: ``[w cos, w sin] @ table`` (:meth:`sample`).
+        self.table = torch.zeros(rows, 2 * n, 12, device=self.device, dtype=dtype)
+        #: ``sum_{n in i} (|P_n| + |Q_n|)`` of each component ``(R, M)`` (:meth:`speed_bound`).
+        self.component_speed = torch.zeros(rows, self.n_basis, device=self.device, dtype=dtype)
         self.coeffs = torch.zeros(self.n_flows, self.n_basis, device=self.device, dtype=dtype)
         if self.basis_mode == "fixed":
             own = torch.Generator(device=self.device).manual_seed(seed)
@@ -192,8 +199,18 @@ class StochasticFlow3D(OUCoefficients, PointFlow):
         self.wavevectors[rows] = k.to(self.dtype)
         self.pot_cos[rows] = (scale * xi).to(self.dtype)
         self.pot_sin[rows] = (scale * eta).to(self.dtype)
-        self.amp_cos[rows] = (scale * torch.linalg.cross(k, eta)).to(self.dtype)
-        self.amp_sin[rows] = (-scale * torch.linalg.cross(k, xi)).to(self.dtype)
+        p = scale * torch.linalg.cross(k, eta)
+        q = -scale * torch.linalg.cross(k, xi)
+        self.amp_cos[rows] = p.to(self.dtype)
+        self.amp_sin[rows] = q.to(self.dtype)
+
+        def outer(a: torch.Tensor) -> torch.Tensor:  # a_n (x) k_n, flattened (i, j) -> 3 i + j
+            return (a.unsqueeze(-1) * k.unsqueeze(-2)).flatten(-2)
+
+        table = torch.cat((torch.cat((p, outer(q)), -1), torch.cat((q, -outer(p)), -1)), 1)
+        self.table[rows] = table.to(self.dtype)
+        speed = (p.norm(dim=-1) + q.norm(dim=-1)).unflatten(-1, (self.n_basis, self.n_waves))
+        self.component_speed[rows] = speed.sum(-1).to(self.dtype)
 
     def reset(self, flows: torch.Tensor | None = None) -> None:
         """Redraw the modes (unless fixed) and ``c_i(0) ~ N(0, 1/M)`` of the flows where
@@ -228,18 +245,22 @@ class StochasticFlow3D(OUCoefficients, PointFlow):
         ``coeffs`` ``(F, M)``):
 
         ``u = sum_n w_n (P_n cos k_n.x + Q_n sin k_n.x)``,
-        ``A_ij = sum_n w_n (Q_ni cos k_n.x - P_ni sin k_n.x) k_nj``.
+        ``A_ij = sum_n w_n (Q_ni cos k_n.x - P_ni sin k_n.x) k_nj``,
+
+        as one product ``[w cos(k.x), w sin(k.x)] @`` :attr:`table` ``(F', S, 12)``.
         """
+        everything = flows is None
         flows = self.flow_index(pos, flows)
-        w, k, p, q, _, _ = self._modes(flows, coeffs)
+        c = self.coeffs if coeffs is None else coeffs
+        rows_all = self.wavevectors.shape[0] == 1 or everything
+        k = self.wavevectors if rows_all else self.wavevectors[flows]
+        table = self.table if rows_all else self.table[flows]
+        if not everything:
+            c = c[flows]
+        w = c.repeat_interleave(self.n_waves, dim=-1).repeat(1, 2).unsqueeze(-2)  # (F', 1, 2MK)
         phase = pos @ k.transpose(-1, -2)                               # (F', S, MK)
-        cos, sin = torch.cos(phase), torch.sin(phase)
-        p, q = w * p, w * q                                             # (F', MK, 3)
-        pk = (p.unsqueeze(-1) * k.unsqueeze(-2)).flatten(-2)           # (F', MK, 9)
-        qk = (q.unsqueeze(-1) * k.unsqueeze(-2)).flatten(-2)
-        u = cos @ p + sin @ q
-        grad = (cos @ qk - sin @ pk).unflatten(-1, (3, 3))
-        return u, grad
+        out = (torch.cat((torch.cos(phase), torch.sin(phase)), -1) * w) @ table
+        return out[..., :3], out[..., 3:].unflatten(-1, (3, 3))
 
     def velocity(self, pos: torch.Tensor, flows: torch.Tensor | None = None) -> torch.Tensor:
         """``u`` alone (no gradient products), ``(F', S, 3)``."""
@@ -271,3 +292,62 @@ class StochasticFlow3D(OUCoefficients, PointFlow):
         ``tau_K = <A_ij A_ij>^{-1/2}`` (the 2D flow's :meth:`measured_stats`)."""
         u2, a2 = self.realisation_moments()
         return {"u_rms": u2.mean().item() ** 0.5, "tau_K": a2.mean().item() ** -0.5}
+
+    def speed_bound(self) -> torch.Tensor:
+        """``max_x |u(x, t)| <= sum_n |w_n| (|P_n| + |Q_n|)`` of each flow at its current
+        coefficients, ``(F,)`` (``|P cos + Q sin| <= |P| + |Q|``)."""
+        return (self.coeffs.abs() * self.component_speed).sum(-1)
+
+
+@dataclass(frozen=True)
+class Stochastic3DSpec:
+    """``flow=stochastic3d``: the 3D stochastic flow at Kubo number ``kubo`` (module
+    docstring). Defaults from ``conf/flow/stochastic3d.yaml``.
+
+    Parameters
+    ----------
+    kubo
+        ``Ku = tau_f u_rms / ell_f``.
+    n_modes
+        ``M``, the OU components.
+    n_waves
+        ``K``, the random Fourier modes per component.
+    basis
+        ``redrawn`` (new modes per flow and episode) or ``fixed`` (one set, ``basis_seed``).
+    basis_seed
+        The seed of the fixed modes.
+    name
+        The config group's name.
+    """
+
+    kubo: float
+    n_modes: int = yaml_value("flow/stochastic3d", "n_modes")
+    n_waves: int = yaml_value("flow/stochastic3d", "n_waves")
+    basis: str = yaml_value("flow/stochastic3d", "basis")
+    basis_seed: int = yaml_value("flow/stochastic3d", "basis_seed")
+    name: str = yaml_value("flow/stochastic3d", "name")
+
+    def __post_init__(self) -> None:
+        as_float("flow.kubo", self.kubo, lambda v: v > 0, "> 0 (e.g. 0.1, 1, 10, 1e7)")
+        as_int("flow.n_modes", self.n_modes)
+        as_int("flow.n_waves", self.n_waves)
+        one_of("flow.basis", self.basis, BASIS_MODES)
+        as_int("flow.basis_seed", self.basis_seed, low=0)
+        keep_number_types(self)
+
+
+def _build(spec: Stochastic3DSpec, n_flows, device, dtype, generator, interval, duration
+           ) -> StochasticFlow3D:
+    return StochasticFlow3D(n_flows, spec.kubo, spec.n_modes, spec.n_waves, device=device,
+                            dtype=dtype, generator=generator, basis=spec.basis,
+                            basis_seed=spec.basis_seed)
+
+
+def _bytes(spec: Stochastic3DSpec, n_flows: int, dtype: torch.dtype, interval: float) -> int:
+    """Five ``(M K, 3)`` mode tables per realisation."""
+    size = torch.empty((), dtype=dtype).element_size()
+    return n_flows * spec.n_modes * spec.n_waves * 15 * size
+
+
+register_flow(FlowEntry("stochastic3d", Stochastic3DSpec, _build, 3, table_bytes=_bytes,
+                        kernels=POINT_KERNELS))

@@ -62,14 +62,16 @@ def compute_signals(
     )
 
 
-def signal_indices(names) -> list[int]:
-    """Positions of ``names`` in :data:`SIGNAL_NAMES`; raises on unknown or repeated names."""
+def signal_indices(names, allowed: tuple[str, ...] = SIGNAL_NAMES) -> list[int]:
+    """Positions of ``names`` in ``allowed`` (default :data:`SIGNAL_NAMES`; the 3D set is
+    :data:`~swimrl.physics.signals3d.SIGNAL_NAMES_3D`); raises on unknown or repeated
+    names."""
     names = list(names)
     if not names:
-        raise ConfigError(f"signals.names is empty; choose a subset of {list(SIGNAL_NAMES)}")
-    bad = [s for s in names if s not in SIGNAL_NAMES]
+        raise ConfigError(f"signals.names is empty; choose a subset of {list(allowed)}")
+    bad = [s for s in names if s not in allowed]
     if bad:
-        raise ConfigError(f"signals.names has unknown {bad}; allowed: {list(SIGNAL_NAMES)}")
+        raise ConfigError(f"signals.names has unknown {bad}; allowed: {list(allowed)}")
     if len(set(names)) != len(names):
         raise ConfigError(f"signals.names={names} repeats a signal")
-    return [SIGNAL_NAMES.index(s) for s in names]
+    return [allowed.index(s) for s in names]

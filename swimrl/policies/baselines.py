@@ -23,9 +23,10 @@ from tensordict.nn import TensorDictModule
 from torch import nn
 from torchrl.data import Bounded
 
-from swimrl.errors import as_float, one_of, require
+from swimrl.errors import ConfigError, as_float, one_of, require
 from swimrl.flows.labels import parse_ku_name
 from swimrl.physics.signals import SIGNAL_NAMES
+from swimrl.policies.baselines3d import ShortTimeOptimal3D
 from swimrl.policies.networks import action_bounds
 
 N_R, N_THETA, S_NN, S_NP, OMEGA = range(len(SIGNAL_NAMES))  # positions in SIGNAL_NAMES
@@ -138,6 +139,13 @@ class StrategySpec:
             require(self.coeffs is not None and len(self.coeffs) == 4, "strategy.c1..c4",
                     self.coeffs, "four numbers")
 
+    def check_dimension(self, dim: int) -> None:
+        """``strategy=minimal`` reads ``n_theta`` and ``S_np``, 2D signals: refused in 3D."""
+        if dim == 3 and self.name == "minimal":
+            raise ConfigError(f"strategy={self.name} is invalid with a 3D flow: allowed naive, "
+                              "sto or policy (the minimal model reads the 2D signals n_theta "
+                              "and S_np)")
+
     def check_bound(self, shape_factor_max: float) -> None:
         """A naive shape factor must lie within ``[-Lambda_max, Lambda_max]``."""
         if self.name == "naive":
@@ -149,9 +157,11 @@ class StrategySpec:
             )
 
 
-def build_strategy(spec: StrategySpec, action_spec: Bounded) -> TensorDictModule:
+def build_strategy(spec: StrategySpec, action_spec: Bounded, dim: int = 2
+                   ) -> TensorDictModule:
     """Baseline actor for ``spec``; ``Lambda_max`` is the upper bound of the environment's
-    (unbatched) action spec.
+    (unbatched) action spec; ``dim = 3``: STO on the 3D signals
+    (:class:`~swimrl.policies.baselines3d.ShortTimeOptimal3D`).
 
     Parameters
     ----------
@@ -160,6 +170,8 @@ def build_strategy(spec: StrategySpec, action_spec: Bounded) -> TensorDictModule
         :func:`~swimrl.runs.policy_files.load_policy`).
     action_spec
         The environment's ``action_spec_unbatched``.
+    dim
+        The environment's dimension (``env.dim``).
 
     Returns
     -------
@@ -169,8 +181,9 @@ def build_strategy(spec: StrategySpec, action_spec: Bounded) -> TensorDictModule
     lam_max = action_bounds(action_spec)[1]
     if spec.name == "naive":
         return as_actor(NaiveShape(spec.shape_factor))
+    spec.check_dimension(dim)
     if spec.name == "sto":
-        return as_actor(ShortTimeOptimal(lam_max))
+        return as_actor(ShortTimeOptimal3D(lam_max) if dim == 3 else ShortTimeOptimal(lam_max))
     if spec.name == "minimal":
         return as_actor(MinimalModel(spec.coeffs, lam_max))
     raise ValueError(f"strategy {spec.name!r} is not a baseline (load a policy file instead)")

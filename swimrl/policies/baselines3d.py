@@ -29,9 +29,9 @@ sign(S_np)``.
 from __future__ import annotations
 
 import torch
+from torch import nn
 
 from swimrl.physics.signals3d import SIGNAL_NAMES_3D
-from swimrl.policies.baselines import ShortTimeOptimal
 
 S_NP1 = SIGNAL_NAMES_3D.index("S_np1")
 
@@ -48,10 +48,14 @@ def naive_3d(signals: torch.Tensor, shape_factor: float) -> torch.Tensor:
     return torch.full_like(signals[..., 0], float(shape_factor))
 
 
-class ShortTimeOptimal3D(ShortTimeOptimal):
+class ShortTimeOptimal3D(nn.Module):
     """STO in 3D as a ``signals -> action`` module: ``Lambda = Lambda_max sign(S_np1)``,
     ``(..., 1)`` (constructed as the 2D :class:`~swimrl.policies.baselines.ShortTimeOptimal`).
     """
+
+    def __init__(self, shape_factor_max: float):
+        super().__init__()
+        self.shape_factor_max = float(shape_factor_max)
 
     def forward(self, signals: torch.Tensor) -> torch.Tensor:
         return short_time_optimal_3d(signals, self.shape_factor_max).unsqueeze(-1)

@@ -34,6 +34,8 @@ from tensordict.nn import TensorDictModule
 from swimrl.env import EnvParams
 from swimrl.errors import BadFileError, ConfigError
 from swimrl.flows.labels import parse_ku_name
+from swimrl.physics.signals import SIGNAL_NAMES
+from swimrl.physics.signals3d import SIGNAL_NAMES_3D
 from swimrl.policies.networks import (
     NO_STD_BOUND,
     ModelSpec,
@@ -185,6 +187,8 @@ def resolve_policy_file(spec: str) -> Path:
 def signals_choice(names) -> str:
     """``signals=<group>`` whose ``conf/signals/<group>.yaml`` lists ``names``, else
     ``signals.names=[...]``."""
+    if tuple(names) in (SIGNAL_NAMES, SIGNAL_NAMES_3D):  # signals=all: the flow's whole set
+        return "signals=all"
     groups = importlib.resources.files("swimrl.conf") / "signals"
     for f in sorted(groups.iterdir(), key=lambda f: f.name):
         if f.name.endswith(".yaml") and yaml.safe_load(f.read_text()).get("names") == list(names):

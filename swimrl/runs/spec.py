@@ -9,8 +9,11 @@ from dataclasses import dataclass, replace
 
 from swimrl.conf_values import yaml_value
 from swimrl.env import EnvParams
-from swimrl.errors import as_bool, as_int, keep_number_types, require
+from swimrl.errors import ConfigError, as_bool, as_int, keep_number_types, one_of, require
 from swimrl.flows.build import FlowSpec
+from swimrl.flows.registry import flow_dimension, flow_entry
+from swimrl.physics.signals import SIGNAL_NAMES, signal_indices
+from swimrl.physics.signals3d import SIGNAL_NAMES_3D
 from swimrl.runtime import Runtime
 
 
@@ -80,6 +83,19 @@ class RunSpec:
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "seed", as_int("seed", self.seed, low=0))
+        names = SIGNAL_NAMES_3D if self.dimension == 3 else SIGNAL_NAMES
+        try:
+            signal_indices(self.params.signals, names)
+        except ConfigError as err:
+            raise ConfigError(f"{err} (flow={self.flow.name} is {self.dimension}D)") from None
+        kernels = flow_entry(self.flow.name).kernels
+        if kernels is not None:
+            one_of("kernel", self.runtime.kernel, kernels)
+
+    @property
+    def dimension(self) -> int:
+        """2 or 3, the flow's (:func:`~swimrl.flows.registry.flow_dimension`)."""
+        return flow_dimension(self.flow)
 
     def resized(self, n_flows: int, n_swimmers: int) -> RunSpec:
         """The same setup with ``n_flows x n_swimmers`` and no progress bar."""
