@@ -197,6 +197,7 @@ def compare_config(cfg: DictConfig) -> CompareConfig:
         minimal,
         [str(p) for p in (c.policies or [])],
         [read_coefficients(p) for p in (c.minimal_fits or [])],
+        [tuple(_float(x) for x in pair) for pair in c.sto_amplitudes],
     )
     return from_node(CompareConfig, {"compare.": c, "": cfg}, setup=setup, variants=variants)
 

@@ -245,7 +245,7 @@ def test_strategy_fields_are_those_of_its_yaml(strategy):
     fields of the other strategies."""
     node = _compose("evaluate", f"strategy={strategy}").strategy
     spec = strategy_spec(node)
-    assert defaults(StrategySpec) == {"shape_factor": None, "coeffs": None}
+    assert defaults(StrategySpec) == {"shape_factor": None, "coeffs": None, "amplitudes": None}
     assert spec.shape_factor == node.get("shape_factor")
     coeffs = [node.get(k) for k in ("c1", "c2", "c3", "c4")]
     assert spec.coeffs == (None if coeffs[0] is None else tuple(coeffs))
@@ -266,6 +266,7 @@ def test_strategy_variants_keywords_are_compare_yaml():
     assert _plain(got["minimal"]) == [cfg.compare.minimal[k] for k in ("c1", "c2", "c3", "c4")]
     assert _plain(got["policies"]) == list(cfg.compare.policies) == []
     assert _plain(got["minimal_fits"]) == list(cfg.compare.minimal_fits) == []
+    assert _plain(got["sto_amplitudes"]) == list(cfg.compare.sto_amplitudes) == []
 
 
 def test_network_keywords_are_the_model_yaml():

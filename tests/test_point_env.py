@@ -232,3 +232,35 @@ def test_swimrl_eval_3d_writes_trajectories(tmp_path):
         assert list(z["signal_names"]) == list(SIGNAL_NAMES_3D)
         r = np.linalg.norm(pos[..., -1, :] - pos[..., 0, :], axis=-1) / z["reference_distance"]
         np.testing.assert_allclose(r, z["R_hat"], rtol=1e-5)
+
+
+def test_sto_amplitude_family():
+    """``sto(+a,-b)``: STO's sign choice with the prolate amplitude ``a`` and the oblate ``-b``;
+    ``(L, L)`` is plain STO at ``Lambda_max = L``; 2D and 3D; bad pairs named in one line."""
+    from torchrl.data import Bounded
+
+    from swimrl.evaluation.compare import strategy_variants
+    from swimrl.policies.baselines import ShortTimeOptimal, StrategyLabel, StrategySpec
+
+    sig = torch.randn(1000, 5, generator=torch.Generator().manual_seed(0))
+    sto = ShortTimeOptimal(0.98)(sig)
+    torch.testing.assert_close(ShortTimeOptimal(0.98, (0.98, 0.98))(sig), sto)
+    torch.testing.assert_close(ShortTimeOptimal(0.98, (0.5, 0.5))(sig), sto * (0.5 / 0.98))
+    asym = ShortTimeOptimal(0.98, (0.9, 0.2))(sig)
+    torch.testing.assert_close(asym, torch.where(sto > 0, 0.9, -0.2))
+    from swimrl.policies.baselines3d import ShortTimeOptimal3D
+    sig3 = torch.randn(1000, 7, generator=torch.Generator().manual_seed(1))
+    lam3 = ShortTimeOptimal3D(0.98, (0.9, 0.2))(sig3)[..., 0]
+    torch.testing.assert_close(lam3, torch.where(sig3[:, 2] > 0, 0.9, -0.2))
+    variants = strategy_variants(["sto"], sto_amplitudes=[[0.98, 0.98], [0.9, 0.2]])
+    assert [v.label for v in variants] == ["sto(+0.98,-0.98)", "sto(+0.90,-0.20)"]
+    assert StrategyLabel.parse("sto(+0.90,-0.20)").numbers == (0.9, -0.2)
+    spec = Bounded(-0.5, 0.5, (1,))
+    from swimrl.policies.baselines import build_strategy
+    with pytest.raises(ConfigError, match="compare.sto_amplitudes"):
+        StrategySpec("sto", amplitudes=(0.9, 0.2)).check_bound(0.5)
+    with pytest.raises(ConfigError, match="compare.sto_amplitudes"):
+        StrategySpec("sto", amplitudes=(0.9,))
+    with pytest.raises(ConfigError, match="compare.sto_amplitudes"):
+        StrategySpec("naive", shape_factor=0.5, amplitudes=(0.9, 0.2))
+    assert build_strategy(StrategySpec("sto", amplitudes=(0.4, 0.1)), spec) is not None

@@ -101,11 +101,14 @@ def strategy_variants(
     policies: Sequence[str] = yaml_value("compare", "compare.policies"),
     minimal_fits: Sequence[tuple[str, Sequence[float]]] = yaml_value(
         "compare", "compare.minimal_fits"),
+    sto_amplitudes: Sequence[Sequence[float]] = yaml_value("compare", "compare.sto_amplitudes"),
 ) -> tuple[Variant, ...]:
     """Variants of ``compare.strategies`` (the keyword defaults: read from ``conf/compare.yaml``):
     ``naive`` expands over ``naive_shape_factors``, ``minimal`` takes the ``minimal``
     coefficients c1..c4, or expands over the labelled ``minimal_fits`` where given, and
-    ``policy`` expands over ``policies`` (run dirs, checkpoints, ``pretrained/NAME``)."""
+    ``policy`` expands over ``policies`` (run dirs, checkpoints, ``pretrained/NAME``), ``sto``
+    over the pairs ``(a_+, a_-)`` of ``sto_amplitudes`` where given (the energy-aware family,
+    :class:`~swimrl.policies.baselines.ShortTimeOptimal`)."""
     allowed = "a list of 'naive', 'sto', 'minimal', 'policy'"
     labels = [label for label, _ in minimal_fits]
     if minimal_fits and "minimal" not in strategies:
@@ -120,6 +123,10 @@ def strategy_variants(
             for lam in naive_shape_factors:
                 spec = StrategySpec("naive", shape_factor=float(lam))
                 out.append(Variant(StrategyLabel.naive(lam).label, spec))
+        elif name == "sto" and sto_amplitudes:
+            for pair in sto_amplitudes:
+                spec = StrategySpec("sto", amplitudes=tuple(pair))
+                out.append(Variant(StrategyLabel.sto(spec.amplitudes).label, spec))
         elif name == "sto":
             out.append(Variant(StrategyLabel("sto").label, StrategySpec("sto")))
         elif name == "minimal" and minimal_fits:

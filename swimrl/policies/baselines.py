@@ -54,21 +54,33 @@ class NaiveShape(nn.Module):
 
 class ShortTimeOptimal(nn.Module):
     """Short-time optimisation (the paper's eq. 10, ``eq:sto``):
-    ``Lambda = -Lambda_max sign(n_theta) sign(S_np)``, read from the ``signals`` key.
+    ``Lambda = -Lambda_max sign(n_theta) sign(S_np)``, read from the ``signals`` key; with
+    ``amplitudes = (a_+, a_-)`` the energy-aware family: the same sign choice
+    ``sigma = -sign(n_theta) sign(S_np)`` with the prolate amplitude ``a_+`` where ``sigma > 0``
+    and the oblate ``-a_-`` where ``sigma < 0`` (0 where ``sigma = 0``); ``a_+ = a_- = a``
+    is STO at ``Lambda_max = a``.
 
     Parameters
     ----------
     shape_factor_max
         ``Lambda_max``.
+    amplitudes
+        ``(a_+, a_-)`` in ``[0, Lambda_max]``, or None (both ``Lambda_max``).
     """
 
-    def __init__(self, shape_factor_max: float):
+    def __init__(self, shape_factor_max: float,
+                 amplitudes: tuple[float, float] | None = None):
         super().__init__()
         self.shape_factor_max = float(shape_factor_max)
+        self.amplitudes = None if amplitudes is None else tuple(float(a) for a in amplitudes)
 
     def forward(self, signals: torch.Tensor) -> torch.Tensor:
         s = torch.sign(signals[..., N_THETA]) * torch.sign(signals[..., S_NP])
-        return (-self.shape_factor_max * s).unsqueeze(-1)
+        if self.amplitudes is None:
+            return (-self.shape_factor_max * s).unsqueeze(-1)
+        prolate, oblate = self.amplitudes
+        lam = torch.where(s < 0, prolate, torch.where(s > 0, -oblate, 0.0))
+        return lam.to(signals.dtype).unsqueeze(-1)
 
 
 def minimal_model(signals: torch.Tensor, coeffs: Sequence[float] | torch.Tensor, lam_max: float):
@@ -125,11 +137,15 @@ class StrategySpec:
         ``naive``: the constant ``Lambda``, in ``(-1, 1)``.
     coeffs
         ``minimal``: ``(c1, c2, c3, c4)``.
+    amplitudes
+        ``sto``: ``(a_+, a_-)``, the prolate and oblate amplitudes (:class:`ShortTimeOptimal`;
+        None: both ``Lambda_max``).
     """
 
     name: str
     shape_factor: float | None = None
     coeffs: tuple[float, float, float, float] | None = None
+    amplitudes: tuple[float, float] | None = None
 
     def __post_init__(self) -> None:
         one_of("strategy.name", self.name, STRATEGIES)
@@ -138,6 +154,14 @@ class StrategySpec:
         if self.name == "minimal":
             require(self.coeffs is not None and len(self.coeffs) == 4, "strategy.c1..c4",
                     self.coeffs, "four numbers")
+        if self.amplitudes is not None:
+            allowed = "a pair [a_+, a_-] of numbers in [0, 1) (strategy=sto only)"
+            pair = tuple(self.amplitudes)
+            require(self.name == "sto" and len(pair) == 2, "compare.sto_amplitudes",
+                    list(pair), allowed)
+            for a in pair:
+                as_float("compare.sto_amplitudes", a, lambda v: 0 <= v < 1, allowed)
+            object.__setattr__(self, "amplitudes", tuple(float(a) for a in pair))
 
     def check_dimension(self, dim: int) -> None:
         """``strategy=minimal`` reads ``n_theta`` and ``S_np``, 2D signals: refused in 3D."""
@@ -147,7 +171,12 @@ class StrategySpec:
                               "and S_np)")
 
     def check_bound(self, shape_factor_max: float) -> None:
-        """A naive shape factor must lie within ``[-Lambda_max, Lambda_max]``."""
+        """A naive shape factor (STO's amplitudes) must lie within ``[-Lambda_max,
+        Lambda_max]``."""
+        if self.amplitudes is not None:
+            require(max(self.amplitudes) <= shape_factor_max, "compare.sto_amplitudes",
+                    list(self.amplitudes),
+                    f"amplitudes in [0, {shape_factor_max}] (swimmer.shape_factor_max)")
         if self.name == "naive":
             require(
                 abs(self.shape_factor) <= shape_factor_max,
@@ -183,7 +212,9 @@ def build_strategy(spec: StrategySpec, action_spec: Bounded, dim: int = 2
         return as_actor(NaiveShape(spec.shape_factor))
     spec.check_dimension(dim)
     if spec.name == "sto":
-        return as_actor(ShortTimeOptimal3D(lam_max) if dim == 3 else ShortTimeOptimal(lam_max))
+        if dim == 3:
+            return as_actor(ShortTimeOptimal3D(lam_max, spec.amplitudes))
+        return as_actor(ShortTimeOptimal(lam_max, spec.amplitudes))
     if spec.name == "minimal":
         return as_actor(MinimalModel(spec.coeffs, lam_max))
     raise ValueError(f"strategy {spec.name!r} is not a baseline (load a policy file instead)")
@@ -224,6 +255,15 @@ class StrategyLabel:
     def naive(cls, shape_factor: float) -> StrategyLabel:
         """``naive(+0.98)``: a comparison's row of a constant shape factor."""
         return cls("naive", f"{float(shape_factor):+.2f}")
+
+    @classmethod
+    def sto(cls, amplitudes: Sequence[float] | None = None) -> StrategyLabel:
+        """``sto``, or ``sto(+0.98,-0.30)``: STO choosing between the shape factors ``a_+``
+        and ``-a_-`` (``%+.2f``)."""
+        if amplitudes is None:
+            return cls("sto")
+        prolate, oblate = amplitudes
+        return cls("sto", f"{float(prolate):+.2f},{-float(oblate):+.2f}")
 
     @classmethod
     def minimal(cls, fit: str = "") -> StrategyLabel:

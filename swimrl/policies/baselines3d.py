@@ -50,12 +50,19 @@ def naive_3d(signals: torch.Tensor, shape_factor: float) -> torch.Tensor:
 
 class ShortTimeOptimal3D(nn.Module):
     """STO in 3D as a ``signals -> action`` module: ``Lambda = Lambda_max sign(S_np1)``,
-    ``(..., 1)`` (constructed as the 2D :class:`~swimrl.policies.baselines.ShortTimeOptimal`).
+    ``(..., 1)``; with ``amplitudes = (a_+, a_-)``: ``a_+`` where ``S_np1 > 0``, ``-a_-``
+    where ``S_np1 < 0`` (as the 2D :class:`~swimrl.policies.baselines.ShortTimeOptimal`).
     """
 
-    def __init__(self, shape_factor_max: float):
+    def __init__(self, shape_factor_max: float,
+                 amplitudes: tuple[float, float] | None = None):
         super().__init__()
         self.shape_factor_max = float(shape_factor_max)
+        self.amplitudes = None if amplitudes is None else tuple(float(a) for a in amplitudes)
 
     def forward(self, signals: torch.Tensor) -> torch.Tensor:
-        return short_time_optimal_3d(signals, self.shape_factor_max).unsqueeze(-1)
+        if self.amplitudes is None:
+            return short_time_optimal_3d(signals, self.shape_factor_max).unsqueeze(-1)
+        s, (prolate, oblate) = signals[..., S_NP1], self.amplitudes
+        lam = torch.where(s > 0, prolate, torch.where(s < 0, -oblate, 0.0))
+        return lam.to(signals.dtype).unsqueeze(-1)

@@ -1,0 +1,918 @@
+"""docs/reproduction.md's verdict table against the committed records it cites.
+
+Every row of the verdict tables (``| # | the paper | swimrl (± error; sample) | verdict |``)
+has an entry in :data:`ROWS`, and every entry a row; a row of the page without one fails, so
+does an entry whose row is gone. An entry says what the row's ``Record:`` clause is:
+
+* ``json``: the row cites committed records under ``docs/results/`` (a JSON or CSV file, a
+  directory, or a Markdown table or README, which stands for the JSON and CSV files of its
+  directory; a table under ``docs/figures/`` stands for the record it is written from,
+  :data:`FIGURE_TABLES`). Every cited file must exist, and each :class:`Check` recomputes a
+  quoted number from those records only (reading a file outside the cited ones fails), rounded
+  as the page rounds it, and compares the text;
+* ``none``, ``figure only``, ``no committed record``: the page says so, and there are no
+  checks;
+* ``npz``, ``test``, ``doc``: the record is not JSON or CSV (a ``.npz`` array file, a unit
+  test, a docs page); the cited file must exist (the test: with the named test function).
+
+Numbers the page quotes without a record behind them (the paper's values, parameters of a
+measurement, readings of a curve, values of a record that is not JSON or CSV) are listed per
+row in ``unrecorded`` with the reason, and each must appear in its row. Then no decimal
+number, percentage or ``N SEM`` of a row's measurement (its third cell before ``Record:``)
+may be left that is neither checked nor listed: a number added to the page without a record
+check fails until it gets one or is listed with its reason. Ku values, sizes written as
+``10^k``, ``NeK`` or ``15.36M`` and code spans are not counted (:data:`NOT_COUNTED`).
+
+The verdict cells (fourth column) are not scanned for coverage; a :class:`Check` may still
+quote them (``where="verdict"``). Reads JSON and CSV only; well under a second.
+"""
+
+from __future__ import annotations
+
+import csv
+import json
+import math
+import os
+import re
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from functools import cache
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+ROOT = Path(__file__).resolve().parent.parent
+DOCS = ROOT / "docs"
+RESULTS = DOCS / "results"
+PAGE = DOCS / "reproduction.md"
+HEADER = "| # | the paper | swimrl (± error; sample) | verdict |"
+MINUS = "\u2212"
+
+#: The tables under docs/figures/ that rows cite, and the record each is written from.
+FIGURE_TABLES = {
+    "figures/ablation_signals.md": "results/figures/ablation.json",
+    "figures/dnsFlow_transfer.md": "results/dns_transfer",
+    "figures/dnsFlow_replay.md": "results/dns_figures/record.npz",
+}
+
+KUS = ("ku0.1", "ku1", "ku10", "ku1e7")
+KU_VALUE = r"(?:0\.1|1e7|10\^7|10|1)(?![\d.^e])"
+#: Not counted as quoted numbers: Ku values, powers of ten, 1e8-style and 15.36M-style sizes,
+#: code spans (file and run names).
+NOT_COUNTED = [
+    re.compile(r"`[^`]*`"),
+    re.compile(rf"Ku\s*(?:=|≤|≥|<|>)\s*{KU_VALUE}(?:(?:\s*,\s*|\s+and\s+|\s*-\s*){KU_VALUE})*"),
+    re.compile(r"(?:\d+(?:\.\d+)?\s*×\s*)?10\^[−-]?\d+"),
+    re.compile(r"\d+(?:\.\d+)?e[−-]?\d+"),
+    re.compile(r"\d+(?:\.\d+)?M\b"),
+]
+#: What counts as a quoted number: a decimal, a percentage, a multiple of the SEM.
+NUMBER = re.compile(r"[+−-]?\d+(?:\.\d+)?\s?(?:%|SEM\b)|[+−-]?\d+\.\d+")
+LINK = re.compile(r"\[[^\]]*\]\(([^)\s#]+)(?:#[^)]*)?\)")
+
+
+# -- the page ---------------------------------------------------------------------------------
+@dataclass(frozen=True)
+class Row:
+    section: str
+    number: int
+    paper: str
+    ours: str
+    verdict: str
+
+    @property
+    def measure(self) -> str:
+        """The third cell before its ``Record:`` clause."""
+        return self.ours.split("Record:", 1)[0]
+
+    @property
+    def record(self) -> str:
+        parts = self.ours.split("Record:", 1)
+        return parts[1].strip() if len(parts) == 2 else ""
+
+
+@cache
+def verdict_rows() -> dict[int, Row]:
+    rows: dict[int, Row] = {}
+    in_table, section = False, ""
+    for line in PAGE.read_text(encoding="utf-8").splitlines():
+        if line.startswith("## "):
+            section = line[3:].strip()
+        if line.strip() == HEADER:
+            in_table = True
+            continue
+        if not in_table or line.startswith("|---"):
+            continue
+        if not line.startswith("|"):
+            in_table = False
+            continue
+        cells = [c.strip() for c in line.strip().strip("|").split(" | ")]
+        assert len(cells) == 4, f"a verdict row without 4 cells: {line[:120]}"
+        number = int(cells[0])
+        assert number not in rows, f"row {number} twice"
+        rows[number] = Row(section, number, *cells[1:])
+    return rows
+
+
+def cited_targets(row: Row) -> list[Path]:
+    """The files and directories the row's Record clause links to (relative to docs/)."""
+    return [DOCS / t for t in LINK.findall(row.record)]
+
+
+def record_roots(row: Row) -> list[Path]:
+    """What the row's records are: cited JSON/CSV files and directories under docs/results;
+    a cited Markdown file or README there stands for its directory; a cited table under
+    docs/figures for the record it is written from."""
+    roots = []
+    for target in cited_targets(row):
+        rel = target.relative_to(DOCS).as_posix()
+        if rel in FIGURE_TABLES:
+            target = DOCS / FIGURE_TABLES[rel]
+        if RESULTS not in target.parents:
+            continue
+        if target.is_dir() or target.suffix in (".json", ".csv", ".npz"):
+            roots.append(target)
+        else:
+            roots.append(target.parent)
+    return roots
+
+
+# -- reading records (tracked: a check may read only its row's records) -------------------------
+_READ: list[Path] = []
+
+
+@cache
+def _json(path: Path):
+    return json.loads(path.read_text(encoding="utf-8"))
+
+
+@cache
+def _csv(path: Path) -> list[dict[str, str]]:
+    with path.open(newline="") as f:
+        return list(csv.DictReader(f))
+
+
+def rec(rel: str):
+    """The JSON record ``docs/results/<rel>`` (the read is tracked)."""
+    path = RESULTS / rel
+    _READ.append(path)
+    return _json(path)
+
+
+def curve(rel: str, column: str = "eval/R_hat") -> tuple[np.ndarray, np.ndarray]:
+    """``(frames, column)`` of the rows of ``docs/results/<rel>`` (a curves.csv) where
+    ``column`` is set (the read is tracked)."""
+    path = RESULTS / rel
+    _READ.append(path)
+    rows = [r for r in _csv(path) if r.get(column)]
+    return (np.array([float(r["frames"]) for r in rows]),
+            np.array([float(r[column]) for r in rows]))
+
+
+def cmp_rows(rel: str) -> dict[str, dict]:
+    """The rows of a comparison.json by label: ``sto``, ``naive``, ``policy0``, ``policy1``,
+    ... (policy rows in order) and every row under its own label."""
+    out: dict[str, dict] = {}
+    k = 0
+    for r in rec(rel)["rows"]:
+        out[r["label"]] = r
+        if r["label"] == "sto":
+            out["sto"] = r
+        elif r["label"].startswith("naive"):
+            out["naive"] = r
+        elif r["label"].startswith("policy("):
+            out[f"policy{k}"] = r
+            k += 1
+    return out
+
+
+def protocol(ku: str) -> dict[str, dict]:
+    return cmp_rows(f"paper_protocol/{ku}/comparison.json")
+
+
+def seeds(rows: dict[str, dict]) -> list[dict]:
+    return [rows[f"policy{k}"] for k in range(3)]
+
+
+def paired(a, b) -> tuple[float, float]:
+    """``<a>/<b>`` over paired flows and its delta-method SEM (swimrl.evaluation.statistics)."""
+    a, b = np.asarray(a, dtype=float), np.asarray(b, dtype=float)
+    r = float(a.mean() / b.mean())
+    return r, float((a - r * b).std(ddof=1) / math.sqrt(a.size) / b.mean())
+
+
+# -- formatting as the page writes numbers --------------------------------------------------------
+def num(v: float, d: int = 3, sign: bool = False) -> str:
+    s = f"{v:+.{d}f}" if sign else f"{v:.{d}f}"
+    return s.replace("-", MINUS)
+
+
+def pm(v: float, e: float, d: int = 3) -> str:
+    return f"{num(v, d)} ± {num(e, d)}"
+
+
+def nums(values, d: int = 3, sep: str = ", ") -> str:
+    return sep.join(num(v, d) for v in values)
+
+
+def span(values, d: int = 3) -> str:
+    return f"{num(min(values), d)}-{num(max(values), d)}"
+
+
+def pct(v: float, d: int = 0, sign: bool = False) -> str:
+    return f"{num(100 * v, d, sign)} %"
+
+
+def sci(v: float, d: int = 0) -> str:
+    """``3e-3``, ``1e8``, ``4.1e7``: the page's short scientific form."""
+    mantissa, exponent = f"{v:.{d}e}".split("e")
+    return f"{mantissa}e{int(exponent)}"
+
+
+# -- the rows ------------------------------------------------------------------------------------
+@dataclass(frozen=True)
+class Check:
+    """``quote`` appears in the row (``where``: ``ours`` or ``verdict``) and ``compute()``,
+    from the row's records, gives the same text."""
+
+    quote: str
+    compute: Callable[[], str]
+    where: str = "ours"
+
+
+@dataclass(frozen=True)
+class Spec:
+    record: str  # json | none | figure only | no committed record | npz | test | doc
+    checks: tuple[Check, ...] = ()
+    unrecorded: dict[str, str] = field(default_factory=dict)
+
+
+def C(quote: str, compute: Callable[[], str], where: str = "ours") -> Check:
+    return Check(quote, compute, where)
+
+
+PAPER = "the paper's value"
+SETUP = "a parameter of the measurement, not a result"
+
+
+def _sto_means() -> str:
+    return ", ".join(pm(protocol(k)["sto"]["R_hat_mean"], protocol(k)["sto"]["R_hat_sem"])
+                     for k in KUS)
+
+
+def _naive_means() -> str:
+    return ", ".join(pm(protocol(k)["naive"]["R_hat_mean"], protocol(k)["naive"]["R_hat_sem"])
+                     for k in KUS)
+
+
+def _ratios(ku: str, sem_digits: int | None) -> str:
+    s = seeds(protocol(ku))
+    text = nums([r["ratio_to_first"] for r in s], sep=" / ") + " × STO"
+    if sem_digits is not None:
+        text += f" (± {num(max(r['ratio_sem'] for r in s), sem_digits)}"
+    return text
+
+
+def _best_baseline(ku: str) -> float:
+    p = protocol(ku)
+    best = max(p["naive"]["R_hat_mean"], p["sto"]["R_hat_mean"])
+    return float(np.mean([r["R_hat_mean"] / best for r in seeds(p)]))
+
+
+def _smart_naive_1e7() -> str:
+    p = protocol("ku1e7")
+    return " / ".join(pm(*paired(r["per_flow"], p["naive"]["per_flow"])) for r in seeds(p))
+
+
+def _single_flow() -> str:
+    ev = rec("figures/smartPerformance.json")["evaluations"]
+    label = {"ku0.1": "Ku = 0.1", "ku1": "Ku = 1", "ku10": "Ku = 10", "ku1e7": "Ku = 10^7"}
+    return ", ".join(
+        " / ".join(num(ev[k]["derived"]["mean"][n]) for n in ("smart", "STO", "naive"))
+        + f" ({label[k]})" for k in KUS)
+
+
+def _per_seed(fig: str, key: str) -> list[float]:
+    d = rec(f"figures/{fig}.json")["derived"]["per_seed"]
+    return [d[s][key] for s in "012"]
+
+
+def _ku_inf_policy() -> str:
+    smart = rec("figures/kuInf.json")["evaluations"]["ku1e7_seed0"]["actors"]["smart"]
+    return f"`{smart.removeprefix('docs/results/')}`"
+
+
+def _shipped_ku1e7_seed() -> str:
+    shipped = rec("figures/smartPerformance.json")["evaluations"]["ku1e7"]["files"][
+        "pretrained/ku1e7"]
+    ev = rec("figures/kuInf.json")["evaluations"]
+    match = [s for s in "012" for path, sha in ev[f"ku1e7_seed{s}"]["files"].items()
+             if sha == shipped and path.endswith(f"ku1e7_seed{s}/policy.pt")]
+    assert len(match) == 1, match
+    return f"which is the protocol's seed {match[0]}"
+
+
+def _ku_inf_sizes() -> str:
+    r = rec("figures/kuInf.json")
+    e = r["evaluations"]["ku1e7_seed0"]
+    n = e["counts"]["decisions"]
+    assert n == e["setup"]["n_flows"] * e["setup"]["n_swimmers"] * r["params"]["n_decisions"]
+    return (f"{e['setup']['n_flows']} frozen flows × {e['setup']['n_swimmers']} swimmers, "
+            f"{n / 1e7:g} × 10^7 decisions")
+
+
+def _map_corr(ku: str, maps=("n_theta", "omega")) -> list[float]:
+    m = rec("figures/ku_pattern.json")["derived"][ku]["map_correlation"]
+    return [v for name in maps for v in m[name].values()]
+
+
+def _snn_tail() -> str:
+    ev = rec("figures/kuInf.json")["evaluations"]
+    tails = {round(ev[f"ku1e7_seed{s}"]["derived"]["snn"][k] / 1e5)
+             for s in "012" for k in ("n_low", "n_high")}
+    assert len(tails) == 1, tails
+    return f"{tails.pop()} × 10^5 decisions in the tail"
+
+
+def _corr_range(ku: str) -> float:
+    c = [rec("figures/ku_pattern.json")["derived"][ku]["per_seed"][s]["corr_Lambda_ntheta_Snp"]
+         for s in "012"]
+    return max(c) - min(c)
+
+
+def _held_out(sig: str) -> list[dict]:
+    return [cmp_rows(f"ablation_1e8/held_out/{sig}_seed{s}/comparison.json")["policy0"]
+            for s in "012"]
+
+
+def _held_out_naive(sig: str) -> list[float]:
+    out = []
+    for s in "012":
+        r = cmp_rows(f"ablation_1e8/held_out/{sig}_seed{s}/comparison.json")
+        out.append(r["policy0"]["R_hat_mean"] / r["naive"]["R_hat_mean"])
+    return out
+
+
+def _signal_set(signals: list[str]) -> dict:
+    sets = rec("figures/ablation.json")["derived"]["signal_sets"]
+    (s,) = [s for s in sets if s["signals"] == signals]
+    return s
+
+
+def mean_std(values, d: int = 3) -> str:
+    """``mean ± std`` (ddof = 1) over seeds."""
+    return pm(float(np.mean(values)), float(np.std(values, ddof=1)), d)
+
+
+def _early(sig: str, d: int = 2) -> str:
+    """Mean ± std over seeds of smart / STO of the 15.36M-frame runs of ``sig``."""
+    return mean_std([cmp_rows(f"ablation/{sig}_seed{s}/comparison.json")["policy0"]
+                     ["ratio_to_first"] for s in "012"], d)
+
+
+def _below_sto_sems(sig: str) -> list[float]:
+    return [(1 - r["ratio_to_first"]) / r["ratio_sem"] for r in _held_out(sig)]
+
+
+def _minimal(ku: str, ratio: str) -> dict:
+    return rec("figures/ablation.json")["derived"]["minimal"][ku]["ratio"][ratio]
+
+
+def _minimal_sems(ku: str) -> float:
+    r = _minimal(ku, "minimal/smart")
+    return (1 - r["value"]) / r["sem"]
+
+
+def _fit(ku: str) -> dict:
+    return rec(f"minimal_fits/{ku}/fit.json")
+
+
+def _coeff_change(c: str) -> str:
+    a, b = _fit("ku10"), _fit("ku1e7")
+    change = b["coefficients"][c] / a["coefficients"][c] - 1
+    sems = abs(b["coefficients"][c] - a["coefficients"][c]) / math.hypot(
+        a["flow_sem"][c], b["flow_sem"][c])
+    return f"{c} {pct(change)}, {sems:.0f} SEM"
+
+
+def _dns() -> dict[str, list[list[float]]]:
+    """Per strategy label, the per-flow R_hat of each held-out realisation (seed2-5)."""
+    out: dict[str, list[list[float]]] = {}
+    for s in (2, 3, 4, 5):
+        for r in rec(f"dns_transfer/seed{s}/comparison.json")["rows"]:
+            out.setdefault(r["label"], []).append(r["per_flow"])
+    return out
+
+
+def _dns_ratio(label: str) -> tuple[float, float, list[float]]:
+    """The row ``label``'s paired ratio to STO over all 16 flows ± SEM, and its ratio on each
+    realisation (of the means over its 4 flows)."""
+    d = _dns()
+    r, e = paired(np.concatenate(d[label]), np.concatenate(d["sto"]))
+    per = [np.mean(a) / np.mean(b) for a, b in zip(d[label], d["sto"], strict=True)]
+    return r, e, per
+
+
+def policy(name: str) -> str:
+    return f"policy({name})"
+
+
+DNS_RUNS = tuple(policy(p) for p in ("pretrained/dns", "docs/results/dns_train/seed1/policy.pt",
+                                     "docs/results/dns_train/seed2/policy.pt"))
+
+
+def _ku10_over_dns() -> tuple[list[float], list[float]]:
+    """The transferred Ku = 10 policy / each DNS-trained run (all flows), and per realisation
+    the mean over runs."""
+    d = _dns()
+    ku10 = d[policy("pretrained/ku10")]
+    pooled = [np.mean(np.concatenate(ku10)) / np.mean(np.concatenate(d[r])) for r in DNS_RUNS]
+    per = [np.mean([np.mean(ku10[i]) / np.mean(d[r][i]) for r in DNS_RUNS])
+           for i in range(len(ku10))]
+    return pooled, per
+
+
+def _reading(name: str) -> dict[str, dict]:
+    return cmp_rows(f"ku1e7_readings/{name}/comparison.json")
+
+
+def _box(label: str, key: str) -> str:
+    a, b = _reading("default")[key], _reading("box_L20")[key]
+    return (f"{label} {pm(a['R_hat_mean'], a['R_hat_sem'])} → "
+            f"{pm(b['R_hat_mean'], b['R_hat_sem'])}")
+
+
+def _runs_config() -> list[dict]:
+    return [rec(f"paper_runs/{k}_seed{s}/metrics.json")["config"] for k in KUS for s in "012"]
+
+
+def _one(values) -> object:
+    values = set(values)
+    assert len(values) == 1, values
+    return values.pop()
+
+
+def _min_std() -> str:
+    by_ku = {k: _one(rec(f"paper_runs/{k}_seed{s}/metrics.json")["config"]["model"]["min_std"]
+                     for s in "012") for k in KUS}
+    assert by_ku["ku0.1"] == by_ku["ku1"] == by_ku["ku10"]
+    return f"σ ≥ {by_ku['ku10']:g} (Ku ≤ 10) or ≥ {by_ku['ku1e7']:g} (10^7)"
+
+
+def _curve_last(ku: str) -> list[float]:
+    return [curve(f"paper_runs/{ku}_seed{s}/curves.csv")[1][-1] for s in "012"]
+
+
+def _second_half(ku: str) -> list[float]:
+    out = []
+    for s in "012":
+        f, y = curve(f"paper_runs/{ku}_seed{s}/curves.csv")
+        out.append(y[-1] - y[int(np.argmin(abs(f - f[-1] / 2)))])
+    return out
+
+
+def _seed_spread() -> tuple[float, float]:
+    spreads = []
+    for k in ("ku0.1", "ku1", "ku10"):
+        m = [r["R_hat_mean"] for r in seeds(protocol(k))]
+        spreads.append((max(m) - min(m), (max(m) - min(m)) / min(m)))
+    return max(s[0] for s in spreads), max(s[1] for s in spreads)
+
+
+def _noise() -> dict:
+    return rec("figures/robustness-noise.json")
+
+
+def _noise_change() -> str:
+    """Smart's change from D_r = 0, ``<a - b> / <b>`` over the paired flows, ± the SEM of the
+    per-flow differences over ``<b>`` (the page's convention for this row and its table)."""
+    ev = _noise()["evaluations"]
+    b = np.asarray(ev["rot_diffusion=0"]["per_flow"]["smart"])
+    out = []
+    for x in ("0.0001", "0.001", "0.005", "0.01", "0.1"):
+        d = np.asarray(ev[f"rot_diffusion={x}"]["per_flow"]["smart"]) - b
+        change, sem = d.mean() / b.mean(), d.std(ddof=1) / math.sqrt(d.size) / b.mean()
+        out.append(f"{num(100 * change, 1, sign=True)} ± {num(100 * sem, 1)} %")
+    return ", ".join(out)
+
+
+def _robust(sweep: str) -> dict:
+    return rec("figures/robustness.json")["derived"][sweep]
+
+
+def _robust_ev(key: str) -> dict:
+    return rec("figures/robustness.json")["evaluations"][key]["per_flow"]
+
+
+def _robust_paired(a: str, b: str) -> str:
+    return " / ".join(pm(*paired(_robust_ev(f"update_interval={x}")[a],
+                                 _robust_ev(f"update_interval={x}")[b])) for x in ("1", "2"))
+
+
+def _diffusive() -> str:
+    d = _robust("duration")
+    at200 = d["mean"]["naive"][d["x"].index(200.0)]
+    return nums([at200 * math.sqrt(200.0 / t) for t in d["x"]])
+
+
+ROWS: dict[int, Spec] = {
+    1: Spec("figure only"),
+    2: Spec("none"),
+    3: Spec("no committed record", unrecorded={
+        "best at 0.98": SETUP,
+        "0.329 (Ku = 10), 0.733 (Ku = 10^7), against 0.166 and 0.135 at −0.98":
+            "naive scan: its comparison.json records were never committed (row says so)",
+        "SEM ≤ 0.007 (Ku = 10), ≤ 0.08 (10^7)": "naive scan, no committed record"}),
+    4: Spec("none", unrecorded={"Λ = −0.98": SETUP}),
+    5: Spec("test"),
+    6: Spec("json", (C("0.945 ± 0.001, 0.633 ± 0.002, 0.528 ± 0.002, 0.477 ± 0.011",
+                       _sto_means),)),
+    7: Spec("json", (
+        C("0.352 ± 0.001, 0.239 ± 0.001, 0.337 ± 0.002, 0.625 ± 0.020", _naive_means),
+        C("1.31 ± 0.04 × STO", lambda: pm(protocol("ku1e7")["naive"]["ratio_to_first"],
+                                          protocol("ku1e7")["naive"]["ratio_sem"], 2)
+          + " × STO"))),
+    8: Spec("json", (C("0.993 / 0.996 / 0.995 × STO (± 0.0003", lambda: _ratios("ku0.1", 4)),)),
+    9: Spec("json", (C("1.070 / 1.065 / 1.060 × STO (± 0.0016", lambda: _ratios("ku1", 4)),)),
+    10: Spec("json", (C("1.291 / 1.285 / 1.312 × STO (± 0.005", lambda: _ratios("ku10", 3)),)),
+    11: Spec("json", (
+        C("1.539 ± 0.026 / 1.417 ± 0.021 / 1.544 ± 0.025 × STO",
+          lambda: " / ".join(pm(r["ratio_to_first"], r["ratio_sem"])
+                             for r in seeds(protocol("ku1e7"))) + " × STO"),
+        C("mean 1.50", lambda: "mean " + num(np.mean(
+            [r["ratio_to_first"] for r in seeds(protocol("ku1e7"))]), 2)))),
+    12: Spec("json", (C("1.174 ± 0.035 / 1.081 ± 0.032 / 1.179 ± 0.033", _smart_naive_1e7),)),
+    13: Spec("json", (C("0.995, 1.065, 1.296, 1.145",
+                        lambda: nums([_best_baseline(k) for k in KUS])),)),
+    14: Spec("json", (C("1.296 (Ku = 10) and 1.145 (10^7), against 0.995 and 1.065",
+                        lambda: f"{num(_best_baseline('ku10'))} (Ku = 10) and "
+                                f"{num(_best_baseline('ku1e7'))} (10^7), against "
+                                f"{num(_best_baseline('ku0.1'))} and "
+                                f"{num(_best_baseline('ku1'))}"),)),
+    15: Spec("json", (C("0.946 / 0.951 / 0.373 (Ku = 0.1), 0.680 / 0.635 / 0.242 (Ku = 1), "
+                        "0.697 / 0.514 / 0.326 (Ku = 10), 0.611 / 0.387 / 0.349 (Ku = 10^7)",
+                        _single_flow),)),
+    16: Spec("figure only"),
+    17: Spec("json", (C("−0.68 / −0.65 / −0.64",
+                        lambda: nums(_per_seed("ku0.1", "corr_Lambda_ntheta_Snp"), 2, " / ")),)),
+    18: Spec("none"),
+    19: Spec("none"),
+    20: Spec("none"),
+    21: Spec("json", (
+        C("`paper_runs/ku1e7_seed0/policy.pt`", _ku_inf_policy),
+        C("which is the protocol's seed 2", _shipped_ku1e7_seed),
+        C("40 frozen flows × 1000 swimmers, 8 × 10^7 decisions", _ku_inf_sizes)),
+        unrecorded={"8000 decisions": "the plotting code (swimrl/paper/mechanism.py)",
+                    "every 20th decision of 20 swimmers per flow":
+                        "the recorder's sampling (swimrl/paper/mechanism.py)"}),
+    22: Spec("json", (C("0.91-0.97", lambda: span(_map_corr("ku1e7"), 2)),)),
+    23: Spec("json"),
+    24: Spec("json", (
+        C("41 % / 31 % / 41 %",
+          lambda: " / ".join(pct(v) for v in _per_seed("kuInf", "p_pos_given_low"))),
+        C("8 × 10^5 decisions in the tail", _snn_tail),
+        C("mean 38 ± 6 %", lambda: "mean " + mean_std(
+            [100 * p for p in _per_seed("kuInf", "p_pos_given_low")], 0) + " %"))),
+    25: Spec("json", (
+        C("33 % / 35 % / 30 %",
+          lambda: " / ".join(pct(v) for v in _per_seed("kuInf", "p_neg_given_high"))),
+        C("among the 1 % highest", lambda: "among the " + pct(_one(
+            rec("figures/kuInf.json")["evaluations"][f"ku1e7_seed{s}"]["derived"]["snn"]["q"]
+            for s in "012")) + " highest"))),
+    26: Spec("json", (
+        C("−0.66, −0.56, −0.45, −0.44", lambda: nums(
+            [rec("figures/ku_pattern.json")["derived"][k]["per_seed"]
+             ["corr_Lambda_ntheta_Snp_mean"] for k in KUS], 2)),
+        C("range over seeds ≤ 0.04, 0.08 at 10^7",
+          lambda: f"range over seeds ≤ {num(max(_corr_range(k) for k in KUS[:3]), 2)}, "
+                  f"{num(_corr_range('ku1e7'), 2)} at 10^7"))),
+    27: Spec("json", (C("0.95-0.99", lambda: span(
+        [v for k in KUS for v in _map_corr(k, ("omega",))], 2)),)),
+    28: Spec("json", (C("1.291 / 1.285 / 1.312 × STO (± 0.005", lambda: _ratios("ku10", 3)),)),
+    29: Spec("json", (
+        C("1.211 ± 0.006 / 1.221 ± 0.005 / 1.173 ± 0.005",
+          lambda: " / ".join(pm(r["ratio_to_first"], r["ratio_sem"])
+                             for r in _held_out("nr_nth_snp_w"))),
+        C("against 1.285-1.312 for all signals", lambda: "against " + span(_signal_set(
+            ["n_r", "n_theta", "S_nn", "S_np", "omega"])["ratios"]) + " for all signals"),
+        C("1.10 ± 0.08 against 1.15 ± 0.01",
+          lambda: f"{_early('nr_nth_snp_w')} against {_early('all')}"))),
+    30: Spec("json", (C("1.003 / 0.975 / 1.008 (± 0.003)", lambda: nums(
+        [r["ratio_to_first"] for r in _held_out("nr_nth_snp")], sep=" / ")
+        + f" (± {num(max(r['ratio_sem'] for r in _held_out('nr_nth_snp')))})"),)),
+    31: Spec("json", (
+        C("0.982 ± 0.003 / 0.936 ± 0.003 / 0.990 ± 0.004",
+          lambda: " / ".join(pm(r["ratio_to_first"], r["ratio_sem"])
+                             for r in _held_out("nth_snp"))),
+        C("mean 0.969, std 0.029", lambda: "mean {}, std {}".format(*mean_std(
+            [r["ratio_to_first"] for r in _held_out("nth_snp")]).split(" ± "))),
+        C("seed 0 is 2 % below the three-signal seed 0",
+          lambda: "seed 0 is " + pct(1 - _held_out("nth_snp")[0]["ratio_to_first"]
+                                     / _held_out("nr_nth_snp")[0]["ratio_to_first"])
+          + " below the three-signal seed 0"))),
+    32: Spec("json", (
+        C("below STO on 3 of 3 seeds (2.7-21 SEM)",
+          lambda: f"below STO on {sum(s > 0 for s in _below_sto_sems('nth_snp'))} of 3 seeds "
+                  f"({min(_below_sto_sems('nth_snp')):.1f}-"
+                  f"{max(_below_sto_sems('nth_snp')):.0f} SEM)"),
+        C("(1.003 ± 0.003, 1.008 ± 0.003), seed 1 below (0.975 ± 0.003)",
+          lambda: "({}, {}), seed 1 below ({})".format(*(
+              pm(_held_out("nr_nth_snp")[s]["ratio_to_first"],
+                 _held_out("nr_nth_snp")[s]["ratio_sem"]) for s in (0, 2, 1)))))),
+    33: Spec("json", (
+        C("0.731 / 0.762 / 0.729 ± 0.004", lambda: nums(
+            [r["ratio_to_first"] for r in _held_out("nr_nth_snn_w")], sep=" / ")
+            + " ± " + num(_one(round(r["ratio_sem"], 3) for r in _held_out("nr_nth_snn_w")))),
+        C("1.16 / 1.21 / 1.15 × naive",
+          lambda: nums(_held_out_naive("nr_nth_snn_w"), 2, " / ") + " × naive"),
+        C("0.741 ± 0.019", lambda: pm(_signal_set(["n_r", "n_theta", "S_nn", "omega"])["mean"],
+                                      _signal_set(["n_r", "n_theta", "S_nn", "omega"])["std"])),
+        C("0.664 ± 0.033", lambda: _early("nr_nth_snn_w", 3)))),
+    34: Spec("json", (
+        C("1.000 ± 0.001 (Ku = 0.1), 0.969 ± 0.003 (1), 0.931 ± 0.006 (10), "
+          "0.954 ± 0.016 (10^7)",
+          lambda: ", ".join(pm(_minimal(k, "minimal/smart")["value"],
+                               _minimal(k, "minimal/smart")["sem"]) + f" ({lab})"
+                            for k, lab in zip(KUS, ("Ku = 0.1", "1", "10", "10^7"),
+                                              strict=True))),
+        C("minimal / STO 0.996, 1.043, 1.222, 1.358", lambda: "minimal / STO " + nums(
+            [_minimal(k, "minimal/STO")["value"] for k in KUS])),
+        C("20 flows × 500", lambda: "{n_flows} flows × {n_swimmers}".format(
+            **rec("figures/ablation.json")["sizes"]["sweep"])),
+        C("12 and 11.5 SEM at Ku = 1 and 10, 2.9 SEM at 10^7",
+          lambda: f"{_minimal_sems('ku1'):.0f} and {_minimal_sems('ku10'):.1f} SEM at Ku = 1 "
+                  f"and 10, {_minimal_sems('ku1e7'):.1f} SEM at 10^7", where="verdict"))),
+    35: Spec("json", (
+        C("4.34 ± 0.05, 2.80 ± 0.03, 2.80 ± 0.07, 1.73 ± 0.12", lambda: ", ".join(
+            pm(_fit(k)["coefficients"]["c1"], _fit(k)["flow_sem"]["c1"], 2) for k in KUS)),
+        C("8 flows × 100", lambda: "{} flows × {}".format(*_one(
+            (_fit(k)["config"]["eval"]["n_flows"], _fit(k)["config"]["eval"]["n_swimmers"])
+            for k in KUS))))),
+    36: Spec("json", (
+        C("c2 0.46 → 2.19, c3 0.26 → 0.75, c4 0.05 → 0.42", lambda: ", ".join(
+            f"{c} {num(_fit('ku0.1')['coefficients'][c], 2)} → "
+            f"{num(_fit('ku10')['coefficients'][c], 2)}" for c in ("c2", "c3", "c4"))),
+        C("c2 −23 %, 5 SEM; c3 −10 %, 2 SEM; c4 −25 %, 3 SEM",
+          lambda: "; ".join(_coeff_change(c) for c in ("c2", "c3", "c4"))))),
+    37: Spec("npz"),
+    38: Spec("json", (C("flatness 3.80 / 3.31 / 3.29", lambda: "flatness " + nums(
+        [rec("dns_checks/dns_checks.json")["pooled_moments"][k]["flatness"]
+         for k in ("omega", "S_xx", "S_xy")], 2, " / ")),)),
+    39: Spec("json", (
+        C("1.215 ± 0.008 × STO (std over 4 realisations 0.019)",
+          lambda: (lambda r, e, per: f"{pm(r, e)} × STO (std over {len(per)} realisations "
+                                     f"{num(np.std(per, ddof=1))})")(
+              *_dns_ratio(policy("pretrained/ku10")))),
+        C("0.983, 1.133, 1.204", lambda: nums(
+            [_dns_ratio(policy(f"pretrained/{k}"))[0] for k in ("ku0.1", "ku1", "ku1e7")])),
+        C("10^7 below 10 on every realisation", lambda: "10^7 below 10 on every realisation"
+          if all(a < b for a, b in zip(_dns_ratio(policy("pretrained/ku1e7"))[2],
+                                       _dns_ratio(policy("pretrained/ku10"))[2], strict=True))
+          else "not on every realisation"))),
+    40: Spec("json", (
+        C("1.134 / 1.124 / 1.148 × STO", lambda: nums(
+            [_dns_ratio(r)[0] for r in DNS_RUNS], sep=" / ") + " × STO"),
+        C("1.070 ± 0.011 × them", lambda: pm(np.mean(_ku10_over_dns()[0]),
+                                              np.std(_ku10_over_dns()[0], ddof=1)) + " × them"),
+        C("1.061-1.076 per realisation", lambda: span(_ku10_over_dns()[1])
+          + " per realisation")),
+        unrecorded={"+0.02 step of seed 2": "a step read off dns_train/seed2/curves.csv"}),
+    41: Spec("json", (
+        C("minimal (Ku = 10 fit) 1.136 ± 0.007 × STO against 1.215 ± 0.008",
+          lambda: f"minimal (Ku = 10 fit) {pm(*_dns_ratio('minimal(ku10)')[:2])} × STO "
+                  f"against {pm(*_dns_ratio(policy('pretrained/ku10'))[:2])}"),
+        C("94 %", lambda: pct(_dns_ratio("minimal(ku10)")[0]
+                              / _dns_ratio(policy("pretrained/ku10"))[0])),
+        C("gap 0.068-0.090 on each realisation", lambda: "gap " + span(
+            [a - b for a, b in zip(_dns_ratio(policy("pretrained/ku10"))[2],
+                                   _dns_ratio("minimal(ku10)")[2], strict=True)])
+          + " on each realisation"),
+        C("1.002, 1.065, 1.148", lambda: nums(
+            [_dns_ratio(f"minimal({k})")[0] for k in ("ku0.1", "ku1", "ku1e7")])))),
+    42: Spec("json", (
+        C("1.133 ± 0.006 × STO (std over realisations 0.014)",
+          lambda: (lambda r, e, per: f"{pm(r, e)} × STO (std over realisations "
+                                     f"{num(np.std(per, ddof=1))})")(
+              *_dns_ratio(policy("pretrained/ku1")))),
+        C("minimal (Ku = 1 fit) 1.065 ± 0.005",
+          lambda: f"minimal (Ku = 1 fit) {pm(*_dns_ratio('minimal(ku1)')[:2])}"))),
+    43: Spec("npz"),
+    44: Spec("json", (
+        C("100 × 100", lambda: "{} × {}".format(*_one(
+            (rec(f"ku1e7_readings/{n}/comparison.json")["n_flows"],
+             rec(f"ku1e7_readings/{n}/comparison.json")["n_swimmers"])
+            for n in ("default", "box_L20", "box_L40")))),
+        C("naive 0.606 ± 0.018 → 0.531 ± 0.015", lambda: _box("naive", "naive")),
+        C("(3 SEM, independent flows)", lambda: "({:.0f} SEM, independent flows)".format(
+            (_reading("default")["naive"]["R_hat_mean"] - _reading("box_L20")["naive"]
+             ["R_hat_mean"]) / math.hypot(_reading("default")["naive"]["R_hat_sem"],
+                                          _reading("box_L20")["naive"]["R_hat_sem"]))),
+        C("smart 0.731 ± 0.009 → 0.683 ± 0.007", lambda: _box("smart", "policy0")))),
+    45: Spec("doc", unrecorded={"τ_f = 0.2 τ_K": "derived from the flow's definition "
+                                                  "(physics.md), no record"}),
+    46: Spec("json", (
+        C("64 flows × 8 swimmers per update, minibatches of 2560",
+          lambda: "{} flows × {} swimmers per update, minibatches of {}".format(*_one(
+              (c["train"]["n_flows"], c["train"]["n_swimmers"], c["train"]["minibatch_size"])
+              for c in _runs_config()))),
+        C("lr 3e-3 / 1e-3 decaying linearly", lambda: "lr {} / {} decaying {}ly".format(*_one(
+            (sci(c["optim"]["lr_actor"]), sci(c["optim"]["lr_critic"]), c["optim"]["anneal"])
+            for c in _runs_config()))),
+        C("(1e8 frames = 5000 episodes; 4.1e7 at Ku = 0.1)",
+          lambda: "({} frames = 5000 episodes; {} at Ku = 0.1)".format(
+              sci(_one(c["train"]["total_frames"] for c in _runs_config()[3:])),
+              sci(_one(c["train"]["total_frames"] for c in _runs_config()[:3]), 1))),
+        C("no entropy bonus, λ_GAE = 0.95",
+          lambda: ("no entropy bonus" if _one(c["loss"]["entropy_coeff"]
+                                              for c in _runs_config()) == 0 else "entropy")
+          + f", λ_GAE = {_one(c['loss']['gae_lambda'] for c in _runs_config()):g}"),
+        C("σ ≥ 0.5 (Ku ≤ 10) or ≥ 0.3 (10^7)", _min_std))),
+    47: Spec("json", (
+        C("16 flows × 32", lambda: "{} flows × {}".format(*_one(
+            (c["train"]["eval_flows"], c["train"]["eval_swimmers"]) for c in _runs_config()))),
+        C("(0.938-0.942 at the end)", lambda: f"({span(_curve_last('ku0.1'))} at the end)"),
+        C("(0.671-0.681)", lambda: f"({span(_curve_last('ku10'))})"),
+        C("Ku = 1 +0.01-0.03 over the second half",
+          lambda: f"Ku = 1 {num(min(_second_half('ku1')), 2, sign=True)}-"
+                  f"{num(max(_second_half('ku1')), 2)} over the second half"),
+        C("(0.698, 0.676)", lambda: f"({nums(_curve_last('ku1e7')[:2])})")),
+        unrecorded={"≈ 1000 episodes": "a reading of the curves",
+                    "≈ 3000": "a reading of the curves"}),
+    48: Spec("json", (
+        C("within 0.014 (2 %) at Ku ≤ 10",
+          lambda: f"within {num(_seed_spread()[0])} ({pct(_seed_spread()[1])}) at Ku ≤ 10"),
+        C("seed 1 is 8 % below seeds 0 and 2", lambda: "seed 1 is " + pct(1 - seeds(
+            protocol("ku1e7"))[1]["R_hat_mean"] / np.mean(
+            [seeds(protocol("ku1e7"))[s]["R_hat_mean"] for s in (0, 2)]))
+          + " below seeds 0 and 2"),
+        C("(0.676 ± 0.009 against 0.734 ± 0.008, 0.736 ± 0.008)",
+          lambda: "({} against {}, {})".format(*(pm(seeds(protocol("ku1e7"))[s]["R_hat_mean"],
+                                                    seeds(protocol("ku1e7"))[s]["R_hat_sem"])
+                                                 for s in (1, 0, 2)))))),
+    49: Spec("json", (
+        C("+0.2 ± 0.8 %, +0.3 ± 0.9 %, −1.4 ± 0.7 %, −2.7 ± 0.9 %, −22.8 ± 0.9 %",
+          _noise_change),
+        C("20 flows × 500", lambda: "{n_flows} flows × {n_swimmers}".format(
+            **_noise()["sizes"]["sweep"])))),
+    50: Spec("json", (
+        C("smart / STO 1.309-1.324 (± 0.01) up to 10^-2", lambda: "smart / STO {} (± {}) up to "
+          "10^-2".format(span(_noise()["derived"]["rot_diffusion"]["smart/STO"][:5]),
+                         num(max(_noise()["derived"]["rot_diffusion"]["smart/STO_sem"][:5]),
+                             2))),
+        C("1.266 ± 0.009 at 10^-1", lambda: pm(
+            _noise()["derived"]["rot_diffusion"]["smart/STO"][5],
+            _noise()["derived"]["rot_diffusion"]["smart/STO_sem"][5]) + " at 10^-1"),
+        C("at 10^-1 smart 0.534, STO 0.421, naive 0.225", lambda: "at 10^-1 " + ", ".join(
+            f"{n} {num(_noise()['derived']['rot_diffusion']['mean'][n][5])}"
+            for n in ("smart", "STO", "naive"))))),
+    51: Spec("json", (
+        C("0.614, 0.459, 0.334, 0.241 (std over flows 0.010-0.032) at T = 50, 100, 200, 400",
+          lambda: "{} (std over flows {}) at T = {}".format(
+              nums(_robust("duration")["mean"]["naive"]),
+              span(_robust("duration")["std"]["naive"]),
+              ", ".join(f"{x:g}" for x in _robust("duration")["x"]))),
+        C("0.669, 0.473, 0.334, 0.236", _diffusive))),
+    52: Spec("json", (
+        C("0.821, 0.745, 0.691, 0.662 (std 0.013-0.032)", lambda: "{} (std {})".format(
+            nums(_robust("duration")["mean"]["smart"]),
+            span(_robust("duration")["std"]["smart"]))),
+        C("−4 % from 200 to 400 τ_K, 19 % higher at 50 τ_K than at 200",
+          lambda: "{} from 200 to 400 τ_K, {} higher at 50 τ_K than at 200".format(
+              pct(_robust("duration")["mean"]["smart"][3]
+                  / _robust("duration")["mean"]["smart"][2] - 1),
+              pct(_robust("duration")["mean"]["smart"][0]
+                  / _robust("duration")["mean"]["smart"][2] - 1))))),
+    53: Spec("json", (
+        C("smart 0.702, 0.691, 0.675, 0.603, 0.475, 0.357 and STO 0.537, 0.528, 0.503, 0.456, "
+          "0.391, 0.322 at T_u / τ_K = 0.05, 0.1, 0.2, 0.5, 1, 2",
+          lambda: "smart {} and STO {} at T_u / τ_K = {}".format(
+              nums(_robust("update_interval")["mean"]["smart"]),
+              nums(_robust("update_interval")["mean"]["STO"]),
+              ", ".join(f"{x:g}" for x in _robust("update_interval")["x"]))),
+        C("naive 0.332-0.337", lambda: "naive " + span(
+            _robust("update_interval")["mean"]["naive"])))),
+    54: Spec("json", (
+        C("smart / STO 1.213 ± 0.009 / 1.109 ± 0.008, smart / naive 1.408 ± 0.013 / "
+          "1.067 ± 0.008, STO / naive 1.161 ± 0.012 / 0.962 ± 0.008",
+          lambda: "smart / STO {}, smart / naive {}, STO / naive {}".format(
+              _robust_paired("smart", "STO"), _robust_paired("smart", "naive"),
+              _robust_paired("STO", "naive"))),)),
+    55: Spec("json", (
+        C("smart 0.804, 0.691, 0.828; STO 0.670, 0.528, 0.670; naive 0.407, 0.334, 0.535 at "
+          "v_s / u_rms = 0.354, 0.707, 1.414",
+          lambda: "; ".join(f"{n} {nums(_robust('swim_speed')['mean'][n])}"
+                            for n in ("smart", "STO", "naive"))
+          + " at v_s / u_rms = " + ", ".join(f"{x:g}" for x in _robust("swim_speed")["x"])),
+        C("smart / STO 1.200 ± 0.009, 1.309 ± 0.012, 1.236 ± 0.014", lambda: "smart / STO "
+          + ", ".join(pm(r, e) for r, e in zip(_robust("swim_speed")["smart/STO"],
+                                               _robust("swim_speed")["smart/STO_sem"],
+                                               strict=True))))),
+    56: Spec("none"),
+    57: Spec("none"),
+    58: Spec("npz", unrecorded={
+        "5.02 L, STO 3.95 L, naive 2.54 L": "dns_figures/record.npz (not JSON/CSV), via the "
+                                            "table docs/figures/dnsFlow_replay.md",
+        "0.702 / 0.553 / 0.355 ± 0.010-0.011": "dns_figures/record.npz (not JSON/CSV)"}),
+}
+
+
+# -- the tests -----------------------------------------------------------------------------------
+def test_every_verdict_row_has_an_entry_and_every_entry_a_row():
+    rows = verdict_rows()
+    assert len(rows) > 50
+    assert sorted(rows) == list(range(1, max(rows) + 1)), "rows are numbered 1..N once"
+    assert set(rows) - set(ROWS) == set(), "rows of the page without an entry here"
+    assert set(ROWS) - set(rows) == set(), "entries here without a row on the page"
+
+
+def _counts(rows) -> tuple[int, ...]:
+    words = [re.match(r"\*\*([a-z ]+)\*\*", r.verdict) for r in rows]
+    assert all(words), "a verdict cell that does not start with a bold verdict word"
+    counted = [w.group(1) for w in words]
+    return (len(counted), counted.count("agrees"), counted.count("agrees in part"),
+            counted.count("differs"), counted.count("not attempted"))
+
+
+def test_the_counts_of_verdicts_add_up():
+    """The first verdict word of each row, counted per section and in all, against the page's
+    count table (``·`` for none)."""
+    table = {}
+    for line in PAGE.read_text(encoding="utf-8").splitlines():
+        m = re.match(r"^\| (?:\[([^\]]+)\]\(#[^)]*\)|(all)) \|((?: [\d·]+ \|){5})$", line)
+        if m:
+            table[m.group(1) or "all"] = tuple(
+                0 if c.strip() == "·" else int(c) for c in m.group(3).strip(" |").split(" | "))
+    rows = list(verdict_rows().values())
+    sections = {r.section for r in rows}
+    assert set(table) == sections | {"all"}, "sections and the count table differ"
+    for name in sections:
+        assert table[name] == _counts([r for r in rows if r.section == name]), name
+    assert table["all"] == _counts(rows)
+
+
+@pytest.mark.parametrize("number", sorted(ROWS))
+def test_the_record_clause_is_what_the_entry_says(number):
+    row, spec = verdict_rows()[number], ROWS[number]
+    clause = row.record
+    assert clause, f"row {number}: no 'Record:' clause"
+    for target in cited_targets(row):
+        assert target.exists(), f"row {number} cites {target.relative_to(DOCS)}: no such file"
+    if spec.record in ("none", "figure only", "no committed record"):
+        assert clause.startswith(spec.record), f"row {number}: {clause[:80]!r}"
+        assert not spec.checks, f"row {number}: checks against no record"
+        assert not record_roots(row), (
+            f"row {number} says {spec.record!r} and cites records {record_roots(row)}")
+    elif spec.record == "json":
+        roots = record_roots(row)
+        assert roots, f"row {number}: cites no record under docs/results ({clause[:80]!r})"
+        for root in roots:
+            files = [root] if root.is_file() else [
+                name for _, _, names in os.walk(root, followlinks=True) for name in names
+                if name.endswith((".json", ".csv"))]  # paper_runs/<run> are links
+            assert files, f"row {number}: {root.relative_to(DOCS)} holds no JSON or CSV record"
+    elif spec.record == "npz":
+        assert any(t.suffix == ".npz" for t in record_roots(row)), f"row {number}: no .npz"
+    elif spec.record == "test":
+        m = re.search(r"`(tests/[\w/]+\.py)` \(`(test_\w+)`\)", clause)
+        assert m, f"row {number}: {clause!r}"
+        assert f"def {m.group(2)}(" in (ROOT / m.group(1)).read_text(encoding="utf-8")
+    elif spec.record == "doc":
+        assert any(t.suffix == ".md" and RESULTS not in t.parents for t in cited_targets(row))
+    else:
+        pytest.fail(f"row {number}: unknown record kind {spec.record!r}")
+
+
+@pytest.mark.parametrize("number", sorted(n for n, s in ROWS.items() if s.checks))
+def test_quoted_numbers_match_the_cited_records(number):
+    row, spec = verdict_rows()[number], ROWS[number]
+    roots = record_roots(row)
+    bad = []
+    for check in spec.checks:
+        cell = row.ours if check.where == "ours" else row.verdict
+        if check.quote not in cell:
+            bad.append(f"not quoted in the {check.where} cell: {check.quote!r}")
+            continue
+        del _READ[:]
+        got = check.compute()
+        outside = sorted({p.relative_to(DOCS).as_posix() for p in _READ
+                          if not any(p == r or r in p.parents for r in roots)})
+        if outside:
+            bad.append(f"{check.quote!r} read records the row does not cite: {outside}")
+        if got != check.quote:
+            bad.append(f"the page: {check.quote!r}; the records: {got!r}")
+    assert not bad, f"row {number}:\n" + "\n".join(bad)
+
+
+@pytest.mark.parametrize("number", sorted(ROWS))
+def test_every_quoted_number_is_checked_or_declared(number):
+    row, spec = verdict_rows()[number], ROWS[number]
+    text = row.measure
+    for quote in [c.quote for c in spec.checks if c.where == "ours"] + list(spec.unrecorded):
+        assert quote in row.ours, f"row {number}: the entry quotes {quote!r}, the page does not"
+        text = text.replace(quote, " ")
+    for pattern in NOT_COUNTED:
+        text = pattern.sub(" ", text)
+    left = NUMBER.findall(text)
+    assert not left, (f"row {number}: numbers neither checked against a record nor declared "
+                      f"unrecorded: {left}")
