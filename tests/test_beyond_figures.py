@@ -116,3 +116,29 @@ def test_target_frame():
     assert np.allclose(xy[:, 0], 0.0)
     assert np.allclose(xy[:, -1], np.stack([d, np.zeros(5)], -1))
     assert np.allclose(np.linalg.norm(xy, axis=-1), np.linalg.norm(path - start[:, None], axis=-1))
+
+
+def test_sto_amplitudes_of_rows():
+    assert beyond.sto_amplitudes("sto", 0.98) == (0.98, 0.98)
+    assert beyond.sto_amplitudes("sto(+0.90,-0.20)", 0.98) == (0.9, 0.2)
+    assert beyond.sto_amplitudes("naive(+0.98)", 0.98) is None
+
+
+def test_energy_baselines_join_the_energy_record_on_the_same_flows(tmp_path):
+    """``energy_baselines/ku*/comparison.json`` adds its rows to ``energy/ku*``'s when seed,
+    sizes and flow keys are equal, and is refused (one line naming the file) otherwise."""
+    def record(path, labels, seed=0):
+        path.mkdir(parents=True)
+        rows = [{"label": x, "R_hat_mean": 0.5, "energy_mean": 1.0} for x in labels]
+        rec = {"rows": rows, "seed": seed, "n_flows": 20, "n_swimmers": 200,
+               "config": {"flow": {"name": "stochastic", "kubo": 10}}}
+        (path / "comparison.json").write_text(json.dumps(rec))
+
+    record(tmp_path / "energy" / "ku10", ["sto", "naive(+0.98)"])
+    record(tmp_path / "energy_baselines" / "ku10", ["sto(+0.98,-0.98)", "sto(+0.60,-0.00)"])
+    rows = [r["label"] for r in beyond.read_energy(tmp_path)[10.0]["rows"]]
+    assert rows == ["sto", "naive(+0.98)", "sto(+0.98,-0.98)", "sto(+0.60,-0.00)"]
+    shutil.rmtree(tmp_path / "energy_baselines")
+    record(tmp_path / "energy_baselines" / "ku10", ["sto(+0.60,-0.00)"], seed=1)
+    with pytest.raises(ValueError, match="energy_baselines/ku10/comparison.json: not the flows"):
+        beyond.read_energy(tmp_path)

@@ -262,12 +262,25 @@ def build_beyond_target_paths(cfg: FiguresConfig) -> dict:
 
 
 def read_energy(root: Path) -> dict[float, dict]:
-    """``{Ku: comparison record}`` from ``root/energy/ku*/comparison.json``."""
+    """``{Ku: comparison record}`` from ``root/energy/ku*/comparison.json``, with the rows of
+    the energy-aware STO family (``root/energy_baselines/ku*/comparison.json``, the same flows
+    and starts: seed, sizes and flow keys equal, checked) appended."""
     out = {}
     for path in sorted(Path(root).glob("energy/ku*/comparison.json")):
         ku = parse_ku_name(path.parent.name)
         if ku is not None:
             out[ku] = json.loads(path.read_text())
+    for path in sorted(Path(root).glob("energy_baselines/ku*/comparison.json")):
+        ku = parse_ku_name(path.parent.name)
+        if ku not in out:
+            continue
+        extra, rec = json.loads(path.read_text()), out[ku]
+        same = all(extra[k] == rec[k] for k in ("seed", "n_flows", "n_swimmers"))
+        if not same or extra["config"]["flow"] != rec["config"]["flow"]:
+            raise ValueError(f"{path}: not the flows of energy/{path.parent.name} (seed, sizes "
+                             "and flow keys must be equal)")
+        rec["rows"] = rec["rows"] + [r for r in extra["rows"] if r["label"] not in
+                                     {x["label"] for x in rec["rows"]}]
     return dict(sorted(out.items()))
 
 
@@ -281,38 +294,78 @@ def energy_weight(label: str) -> float | None:
     return float(m.group("w")) if m else 0.0
 
 
+#: One colour per energy weight (distinct at neighbouring weights).
+WEIGHT_COLORS = ("tab:red", "tab:orange", "tab:olive", "tab:purple", "tab:brown", "tab:pink")
+
+
+def sto_amplitudes(label: str, lam_max: float) -> tuple[float, float] | None:
+    """``(a_+, a_-)`` of an STO row: ``sto`` is ``(Lambda_max, Lambda_max)``,
+    ``sto(+a,-b)`` is ``(a, b)``; None for any other row."""
+    parsed = StrategyLabel.parse(label)
+    if parsed.name != "sto":
+        return None
+    if not parsed.arg:
+        return (lam_max, lam_max)
+    plus, minus = parsed.numbers
+    return (plus, -minus)
+
+
 def build_beyond_energy(cfg: FiguresConfig) -> dict:
     """Fig. beyondEnergy: ``R_hat`` against ``E_hat`` (± SEM over flows) for every row of
-    each Ku's comparison, the constant shapes as a line, the non-dominated front dashed."""
+    each Ku's comparison: the constant shapes as points (labelled by ``Lambda``), STO with a
+    scanned amplitude ``Lambda = +-a`` as a line in ``a``, STO with unequal prolate / oblate
+    amplitudes as points, the policies coloured by their energy weight, the non-dominated front
+    dashed."""
     recs = read_energy(cfg.beyond)
     if not recs:
         return _pending(cfg, "energy/ku*/comparison.json")
     plt = pyplot()
-    fig, axes = plt.subplots(1, len(recs), figsize=(4.6 * len(recs), 3.9), squeeze=False)
-    cmap = plt.get_cmap("autumn_r")
+    fig, axes = plt.subplots(1, len(recs), figsize=(5.2 * len(recs), 4.2), squeeze=False)
     out = {}
     for a, (ku, rec) in zip(axes[0], recs.items(), strict=True):
         rows = rec["rows"]
+        lam_max = float(rec["config"]["swimmer"]["shape_factor_max"])
         r = np.asarray([x["R_hat_mean"] for x in rows])
         e = np.asarray([x["energy_mean"] for x in rows])
         weights = [energy_weight(x["label"]) for x in rows]
-        w_max = max([w for w in weights if w is not None] or [1.0]) or 1.0
+        palette = {w: WEIGHT_COLORS[i % len(WEIGHT_COLORS)]
+                   for i, w in enumerate(sorted({w for w in weights if w is not None}))}
         naive = [i for i, x in enumerate(rows) if StrategyLabel.parse(x["label"]).name == "naive"]
         if naive:
-            order = sorted(naive, key=lambda i: e[i])
-            a.plot(e[order], r[order], "-", color=COLORS["naive"], lw=0.8, marker=".",
+            a.plot(e[naive], r[naive], "v", color=COLORS["naive"], ms=4, ls="none",
                    label="constant Λ")
+            for i in naive:
+                a.annotate(f"{StrategyLabel.parse(rows[i]['label']).numbers[0]:+.2f}",
+                           (e[i], r[i]), fontsize=5, xytext=(2, -6), textcoords="offset points")
+        amps = {i: sto_amplitudes(x["label"], lam_max) for i, x in enumerate(rows)}
+        sym = sorted((i for i, p in amps.items() if p is not None and p[0] == p[1]),
+                     key=lambda i: amps[i][0])
+        if len(sym) > 1:
+            a.plot(e[sym], r[sym], "-s", color=COLORS["STO"], ms=3, lw=0.8,
+                   label="STO, Λ = ±a (a scanned)")
+            for i in sym:
+                a.annotate(f"{amps[i][0]:g}", (e[i], r[i]), fontsize=5, xytext=(2, 2),
+                           textcoords="offset points")
+        for i, p in amps.items():
+            x = rows[i]
+            if p is None:
+                continue
+            if p == (lam_max, lam_max):
+                a.errorbar(e[i], r[i], xerr=x["energy_sem"], yerr=x["R_hat_sem"], marker="s",
+                           color=COLORS["STO"], label="STO", capsize=2, ms=5)
+            elif p[0] != p[1]:
+                a.plot(e[i], r[i], "D", color="tab:cyan", ms=4, label="STO, +a₊ / −a₋")
+                a.annotate(f"{p[0]:g}/{p[1]:g}", (e[i], r[i]), fontsize=5, xytext=(2, 2),
+                           textcoords="offset points")
         for i, x in enumerate(rows):
             w = weights[i]
-            if StrategyLabel.parse(x["label"]).name == "sto":
-                a.errorbar(e[i], r[i], xerr=x["energy_sem"], yerr=x["R_hat_sem"], marker="s",
-                           color=COLORS["STO"], label="STO", capsize=2)
-            elif w is not None:
+            if w is not None:
                 a.errorbar(e[i], r[i], xerr=x["energy_sem"], yerr=x["R_hat_sem"], marker="o",
-                           color=cmap(0.25 + 0.75 * w / w_max), capsize=2, ms=5,
+                           color=palette[w], capsize=2, ms=5, ls="none",
                            label=f"smart, w = {w:g}")
         front = pareto_front(r, e)
-        a.plot(e[front], r[front], "--", color="0.5", lw=0.8, zorder=0, label="front")
+        order = front[np.argsort(e[front])]
+        a.plot(e[order], r[order], "--", color="0.5", lw=0.8, zorder=0, label="front")
         handles, labels = a.get_legend_handles_labels()
         unique = dict(zip(labels, handles, strict=True))
         a.legend(unique.values(), unique.keys(), fontsize=6)
@@ -320,7 +373,7 @@ def build_beyond_energy(cfg: FiguresConfig) -> dict:
         a.set_ylabel(r"$\hat R$")
         a.set_title(f"{ku_display(ku)}: {rec['n_flows']} flows x {rec['n_swimmers']} swimmers,"
                     f" seed {rec['seed']}", fontsize=9)
-        out[ku] = {"front": [rows[i]["label"] for i in front]}
+        out[ku] = {"front": [rows[i]["label"] for i in order]}
     fig.tight_layout()
     path = Path(cfg.out) / "beyondEnergy.png"
     save(fig, path)
