@@ -221,3 +221,56 @@ def test_every_record_at_tiny_sizes_and_no_input_under_shipped_before(tiny, monk
     ratio = dns["trained_ratio"]
     assert ratio["transferred"] == "policy(pretrained/ku10)" and len(ratio["trained"]) == 3
     assert len(ratio["per_realisation"]) == 4 and dns["c"]["smart"]
+
+
+def test_ku01_record_gains_the_sign_agreement_and_nothing_else_changes(tiny, tmp_path):
+    """ku0.1: the fraction of decisions with sign(Lambda) = sign(Lambda_STO) per seed (and
+    its mean over seeds) in the record; a record made before it was kept gains it from the
+    cached evaluation (with how far that lies from the record) and changes no other field."""
+    for seed in (0, 1):
+        shutil.copytree(PRETRAINED_ROOT / "ku0.1", tmp_path / "runs" / f"ku0.1_seed{seed}")
+    shutil.copytree(PRETRAINED_ROOT / "ku0.1", tmp_path / "policies" / "ku0.1")
+    cfg = tiny("figures.n_flows=1", "figures.n_swimmers=3", "figures.n_traj=2")
+    first = mechanism.build_ku01(cfg)
+    path = cfg.records / "ku0.1.json"
+    made = json.loads(path.read_text())
+    signs = {s: made["evaluations"][f"ku0.1_seed{s}"]["derived"]["sign_STO"] for s in (0, 1)}
+    assert signs[1]["n"] == 60 and signs[1]["undetermined"] >= 6  # n_theta = 0 at the start
+    assert "resimulated" not in signs[1] and 0 <= signs[1]["fraction"] <= 1
+    per = made["derived"]["per_seed"]
+    assert per["1"]["sign_agreement_STO"] == signs[1]["fraction"]
+    assert per["sign_agreement_STO_mean"] == pytest.approx(
+        np.mean([signs[s]["fraction"] for s in (0, 1)]))
+    assert first["sign_smart"] == signs[0]
+    old = json.loads(path.read_text())  # as a record made before the counts were kept
+    for s in (0, 1):
+        del old["evaluations"][f"ku0.1_seed{s}"]["derived"]["sign_STO"]
+        del old["derived"]["per_seed"][str(s)]["sign_agreement_STO"]
+    for key in ("sign_agreement_STO_mean", "sign_agreement_STO_std"):
+        del old["derived"]["per_seed"][key]
+    path.write_text(json.dumps(old, indent=2))
+    mechanism.build_ku01(cfg)
+    new = json.loads(path.read_text())
+    assert mechanism._changed(old, new) is None  # only added
+    added = new["evaluations"]["ku0.1_seed1"]["derived"]["sign_STO"]
+    assert added.pop("resimulated") == {"per_flow_max_abs_diff": 0.0, "same_decisions": True}
+    assert added == signs[1] and new["derived"]["per_seed"] == per
+    text = path.read_text()
+    mechanism.build_ku01(cfg)  # complete: read, not rewritten
+    assert path.read_text() == text
+
+
+def test_ku_inf_record_states_what_is_drawn(tiny):
+    """kuInf: the record says which policy and decisions (a) draws and the colour rule of
+    (b), (c); the figure's sample is the one stated."""
+    cfg = tiny()
+    out = mechanism.build_ku_inf(cfg)
+    rec = records.read_figure_record(cfg.records / "kuInf.json")
+    drawn = rec["derived"]["drawn"]
+    assert drawn["seed"] == 0 and drawn["a"]["policy"] == str(cfg.curves / "ku1e7_seed0" /
+                                                                "policy.pt")
+    assert drawn["a"]["flows"] == 2 and drawn["a"]["sample"] == out["a"]["sample"] == 6
+    assert drawn["bc_colour"] == mechanism.occupancy_rule(30)
+    text = (cfg.records / "kuInf.json").read_text()
+    mechanism.build_ku_inf(cfg)
+    assert (cfg.records / "kuInf.json").read_text() == text  # read as made

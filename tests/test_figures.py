@@ -328,3 +328,162 @@ def test_held_out_ablation_layout(tmp_path):
     _held_out_comparison(protocol / "ku10", {runs_root / "gone": 0.7}, every)
     with pytest.raises(ValueError, match="no run directory"):
         ablation.read_held_out(root, protocol)
+
+
+# -- what the referee asked of the figures (issue "Results a referee accepts") ---------------
+def test_sign_agreement_with_sto_counts_every_decision():
+    """ku0.1: the fraction of decisions with sign(Lambda) = sign(Lambda_STO) = -sign(n_theta
+    S_np), over the decisions where STO has a sign (n_theta = 0 at a first decision: none),
+    streamed equal to one shot, and in the figure's returned data."""
+    sig = RNG.uniform(-1, 1, (200, 30, 5))
+    sig[:, 0, 1] = 0.0  # each trajectory's first decision: n_theta = 0
+    x = sig[..., 1] * sig[..., 3]
+    lam = -0.9 * np.sign(x)
+    flip = RNG.random(lam.shape) < 0.2
+    lam[flip] *= -1
+    st = mechanism.DecisionStats()
+    for i in range(sig.shape[1]):
+        st.add(sig[:, i], lam[:, i])
+    a = st.arrays()
+    got = mechanism.sign_agreement(a)
+    ok = x != 0
+    assert got["undetermined"] == 200 and got["n"] == lam.size
+    assert got["agree"] == int((~flip & ok).sum()) and got["disagree"] == int((flip & ok).sum())
+    assert got["fraction"] == pytest.approx((~flip & ok).sum() / ok.sum())
+    assert mechanism.sign_agreement(mechanism.decision_stats(sig, lam)) == got
+    old = {k: v for k, v in a.items() if k != "sign_STO"}  # arrays cached before the counts
+    assert mechanism.sign_agreement(old) is None
+    sto = mechanism.sign_agreement(mechanism.decision_stats(sig, -0.98 * np.sign(x)))
+    assert sto["fraction"] == 1.0 and sto["disagree"] == 0
+
+
+def test_occupancy_weight_follows_the_stated_rule(tmp_path):
+    """kuInf (b), (c): full colour at the uniform share or above, white at 1/100 of it or
+    below, half way (log scale) at 1/10; blank under MIN_COUNT decisions; the figure reports
+    how many decisions each weight class holds and where (a)'s sample comes from."""
+    counts = np.full((10, 10), 1000)
+    counts[0, 0], counts[0, 1], counts[0, 2], counts[0, 3] = 100, 10, 3, 0
+    w = mechanism.occupancy_weight(counts, decades=2, min_count=5)
+    uniform = counts.sum() / counts.size
+    assert w[5, 5] == 1.0
+    assert w[0, 0] == pytest.approx(1 + np.log10(100 / uniform) / 2)
+    assert w[0, 1] == pytest.approx(max(0.0, 1 + np.log10(10 / uniform) / 2))
+    assert w[0, 2] == w[0, 3] == 0.0  # fewer than 5 decisions
+    rule = mechanism.occupancy_rule(30)
+    assert rule["full_colour_share"] == pytest.approx(1 / 900)
+    assert rule["white_share"] == pytest.approx(1 / 90000) and rule["min_count"] == 5
+    sig, lam = _record(300, 40)
+    stats = mechanism.decision_stats(sig, lam)
+    out = mechanism.fig_ku_inf(stats, tmp_path / "b.png", sample="(a test sample)")
+    assert out["a"] == {"drawn": 8000, "sample": lam.size}
+    for panel in "bc":
+        occ = out["occupancy"][panel]
+        assert 0 <= occ["under_half"] <= 1 - occ["full_colour"] <= 1
+        name = {"b": "omega_nr_pos", "c": "omega_nr_neg"}[panel]
+        assert np.array_equal(occ["weight"],
+                              mechanism.occupancy_weight(stats[f"map_{name}_count"]))
+    assert (tmp_path / "b.png").stat().st_size > 10_000
+
+
+def test_extend_record_adds_fields_and_changes_none(tmp_path):
+    cfg = replace(figures_config(_compose(["progress=false"])), records=tmp_path)
+    rec = {"figure": "kuInf", "sizes": {}, "evaluations": {}, "derived": {"a": 1, "b": [1, 2]}}
+    (tmp_path / "kuInf.json").write_text(json.dumps(rec))
+    same = mechanism.extend_record(cfg, rec, lambda r: None)
+    assert same is rec and json.loads((tmp_path / "kuInf.json").read_text()) == rec
+    new = mechanism.extend_record(cfg, rec, lambda r: r["derived"].update(c={"x": 0.5}))
+    assert new["derived"] == {"a": 1, "b": [1, 2], "c": {"x": 0.5}}
+    assert json.loads((tmp_path / "kuInf.json").read_text()) == new
+    with pytest.raises(AssertionError, match="derived.a"):
+        mechanism.extend_record(cfg, new, lambda r: r["derived"].update(a=2))
+    assert json.loads((tmp_path / "kuInf.json").read_text()) == new
+
+
+def _compose(overrides):
+    from hydra import compose, initialize_config_module
+
+    with initialize_config_module("swimrl.conf", version_base="1.3"):
+        return compose(config_name="figures", overrides=list(overrides))
+
+
+def test_smart_performance_panels_share_axes_draw_smart_on_top_and_explain_their_flow(
+        tmp_path):
+    """(b-e): smart drawn last (on top), one pair of axis limits for all panels; the record's
+    panels_b_e names the drawn flow, its order of the strategies against (a)'s means, and for
+    a pair ordered otherwise in how many of (a)'s flows they are ordered so."""
+    summaries = [summarise(r) for r in load([RESULTS])]
+    assert stochastic.DRAW_ORDER[-1] == "smart"
+    finals = {0.1: RNG.normal(0, 10, (3, 50, 2)), 1e7: RNG.normal(0, 40, (3, 50, 2))}
+    per = {"smart": [0.6], "naive": [0.35], "STO": [0.39]}  # STO > naive here
+    rec = {"evaluations": {"ku1e7": {"per_flow": per}}}
+    panels = stochastic.drawn_flow(rec, summaries)
+    s = next(x for x in summaries if x["kubo"] == 1e7)
+    sto, naive = np.asarray(s["sto"]["per_flow"]), np.asarray(s["naive"]["per_flow"])
+    d = panels["ku1e7"]
+    assert d["order_drawn"] == ["smart", "STO", "naive"] and "ku0.1" not in panels
+    assert d["protocol_above"]["STO>naive"] == [int((sto > naive).sum())]
+    assert d["protocol_flows"] == sto.size and len(d["protocol_above"]["smart>STO"]) == len(
+        s["seeds"])
+    notes = stochastic.panel_notes(panels)
+    assert "smart 0.600, STO 0.390, naive 0.350" in notes[1e7]
+    if d["order_protocol"].index("STO") > d["order_protocol"].index("naive"):
+        assert f"STO > naive here, as in {int((sto > naive).sum())}" in notes[1e7]
+    out = stochastic.fig_smart_performance(summaries, finals, tmp_path / "e.png", "", notes)
+    reach = max(np.abs(f).max() for f in finals.values())
+    assert out["lim"] % 10 == 0 and reach <= out["lim"] < reach * 1.05 + 10
+
+
+def test_training_curves_name_each_runs_held_out_flows(tmp_path):
+    """trainingCurves: each run's held-out flows (metrics.json) in its legend, a panel whose
+    runs were evaluated on different flows says so, the final policies on common flows (the
+    protocol's comparison) drawn beside the curves."""
+    runs = {}
+    for seed in (0, 1):
+        d = tmp_path / "runs" / f"ku1e7_seed{seed}"
+        d.mkdir(parents=True)
+        (d / "curves.csv").write_text("frames,eval/R_hat,eval/R_hat_sem\n0,0.3,0.01\n"
+                                      "1000000,0.6,0.01\n")
+        (d / "metrics.json").write_text(json.dumps({
+            "config": {"train": {"eval_flows": 16, "eval_swimmers": 32}},
+            "training": {"eval_seed": 1_000_000 + seed}}))
+        (d / "policy.pt").write_bytes(b"policy")
+        runs[d] = 0.7 + 0.01 * seed
+    assert training.held_out_flows(tmp_path / "runs" / "ku1e7_seed1") == {
+        "seed": 1_000_001, "n_flows": 16, "n_swimmers": 32}
+    assert training.held_out_flows(tmp_path) is None
+    _held_out_comparison(tmp_path / "protocol" / "ku1e7", runs, ("n_r",), kubo=1e7,
+                         n_flows=100)
+    comp = tmp_path / "protocol" / "ku1e7" / "comparison.json"
+    rec = json.loads(comp.read_text())
+    for row in rec["rows"]:  # summarise reads per-flow values and stds
+        row.update(per_flow=[row["R_hat_mean"]] * 100, R_hat_std=0.0, R_hat_sem=0.0)
+    comp.write_text(json.dumps(rec))
+    common, sizes = training.common_flows(tmp_path / "protocol")
+    assert common == {"ku1e7_seed0": 0.7, "ku1e7_seed1": pytest.approx(0.71)}
+    assert sizes == "100 flows x 4 swimmers of test seed 0"
+    cfg = replace(figures_config(_compose(["progress=false"])), curves=tmp_path / "runs",
+                  results=tmp_path / "protocol", out=tmp_path / "fig")
+    out = training.build_training_curves(cfg)
+    assert out["ku1e7_seed0"] == 0.6 and out["common"] == common
+    assert out["held_out"]["ku1e7_seed0"]["seed"] == 1_000_000
+    assert (tmp_path / "fig" / "trainingCurves.png").stat().st_size > 10_000
+
+
+def test_dns_flow_draws_the_field_at_the_paths_middle_time(tmp_path):
+    """dnsFlow (a): the stored vorticity nearest the middle of the drawn window, not t = 0."""
+    from swimrl.paper import dns
+
+    n = 50
+    rec = {"smart_path": np.cumsum(RNG.normal(0, 0.01, (1, n + 1, 2)), axis=1) + 0.5,
+           "smart_theta": RNG.uniform(0, 6, (1, n + 1)),
+           "smart_Lambda": RNG.uniform(-0.9, 0.9, (1, n)), "update_interval": np.asarray(0.1),
+           "vorticity": RNG.normal(size=(4, 8, 8)), "field_time": np.array([0.0, 1.5, 3.0, 4.5])}
+    for other in ("n_theta", "omega"):
+        rec[f"map_{other}"] = np.zeros((2, 2))
+        rec[f"map_{other}_x"] = rec[f"map_{other}_y"] = np.linspace(-1, 1, 3)
+    out = dns.fig_dns_flow(rec, None, None, tmp_path / "d.png", glyph_window=4.0,
+                           glyph_every=1.0)
+    assert out["a"]["field_time"] == 1.5  # the stored time nearest t = 4 / 2
+    del rec["field_time"]
+    out = dns.fig_dns_flow(rec, None, None, tmp_path / "e.png", glyph_window=4.0)
+    assert out["a"]["field_time"] == 0.0

@@ -368,7 +368,12 @@ def fig_dns_flow(rec: dict | None, pdfs: dict | None, transfer: dict[str, dict] 
         tau_u = float(rec["update_interval"])  # decisions every T_u = update_interval tau_K
         n_win = int(round(glyph_window / tau_u))
         x = rec["smart_path"][0, : n_win + 1]
-        vort = rec["vorticity"][0]
+        # the stored field nearest the window's middle (first on a tie): the path is drawn
+        # over the flow it swam through, not over the field at its start
+        times = np.asarray(rec.get("field_time", np.zeros(1)), dtype=float)
+        frame = int(np.argmin(np.abs(times - glyph_window / 2)))
+        t_field = float(times[frame])
+        vort = rec["vorticity"][frame]
         m = vort.shape[0]
         pad = 0.15  # box units around the path
         shift = np.floor(x.min(0) - pad)  # whole tiles covering the path and the margin
@@ -377,7 +382,7 @@ def fig_dns_flow(rec: dict | None, pdfs: dict | None, transfer: dict[str, dict] 
         vmax = float(np.abs(rec["vorticity"]).max())
         im = a.imshow(np.tile(vort, (reps[1], reps[0])), origin="lower", extent=extent,
                       cmap="RdBu_r", vmin=-vmax, vmax=vmax, interpolation="bilinear")
-        fig.colorbar(im, ax=a, shrink=0.8, label=r"$\omega\tau_K$ at $t = 0$")
+        fig.colorbar(im, ax=a, shrink=0.8, label=f"$\\omega\\tau_K$ at $t = {t_field:g}\\,\\tau_K$")
         a.plot(x[:, 0], x[:, 1], color="k", lw=1.0, zorder=3)
         a.plot(*x[0], "r*", ms=12, zorder=5, label="start")
         g = _glyphs(a, x, rec["smart_theta"][0, :n_win], rec["smart_Lambda"][0, :n_win],
@@ -387,9 +392,11 @@ def fig_dns_flow(rec: dict | None, pdfs: dict | None, transfer: dict[str, dict] 
         a.set_aspect("equal")
         a.set_xlabel(r"$x/L$")
         a.set_ylabel(r"$y/L$")
-        a.set_title(f"(a) smart swimmer, {glyph_window:g} $\\tau_K$; glyphs every "
-                    f"{glyph_every:g} $\\tau_K$ (orange prolate, blue oblate)", fontsize=8)
-        drawn["a"] = {"glyphs": g, "grid": m, "window_decisions": n_win}
+        a.set_title(f"(a) smart swimmer, $t$ = 0-{glyph_window:g} $\\tau_K$; glyphs every "
+                    f"{glyph_every:g} $\\tau_K$ (orange prolate, blue oblate);\nvorticity: "
+                    f"the stored field nearest the path's middle time, $t = {t_field:g}\\,"
+                    f"\\tau_K$", fontsize=8)
+        drawn["a"] = {"glyphs": g, "grid": m, "window_decisions": n_win, "field_time": t_field}
         for ax, other, tag in ((d, "n_theta", "d"), (e, "omega", "e")):
             mean = rec[f"map_{other}"]
             im = ax.pcolormesh(rec[f"map_{other}_x"], rec[f"map_{other}_y"], mean.T,
