@@ -149,6 +149,23 @@ def test_videos_on_a_tiny_record(tmp_path):
                                                                   axis=-1).mean(1))
     traj = video_trajectories(rec, 10.0, tmp_path / "t.mp4", fps=2)
     assert traj["frames"] == 3 and traj["extent"][0] <= rec["traj_abs"][..., 0].min()
+    # with the shape factors: head dots coloured by Lambda, the cloud's read-out, stills
+    rec["traj_lambda"] = RNG.uniform(-0.98, 0.98, (3, 4, 3))
+    rec["cloud_lambda"] = RNG.uniform(-0.98, 0.98, (3, 4, 3))
+    video_cloud(rec, 10.0, tmp_path / "c2.mp4", fps=2, still=tmp_path / "s" / "c2.png")
+    video_trajectories(rec, 10.0, tmp_path / "t2.mp4", fps=2, still=tmp_path / "s" / "t2.png")
+    assert (tmp_path / "s" / "c2.png").stat().st_size > 1000
+    assert (tmp_path / "s" / "t2.png").stat().st_size > 1000
+
+
+def test_frame_lambda_holds_the_shape_from_each_frame_on():
+    from swimrl.paper.records import FRAME_EVERY, frame_lambda
+
+    n = 2 * FRAME_EVERY
+    lam = np.arange(n, dtype=float).reshape(1, 1, 1, n) * np.ones((2, 3, 4, 1))
+    out = frame_lambda(lam)
+    assert out.shape == (3, 2, 4, 3)
+    assert out[0, 0, 0].tolist() == [0, FRAME_EVERY, n - 1]
 
 
 def test_minimal_model_figure_reads_fits_and_draws_both_panels(tmp_path):

@@ -75,3 +75,24 @@ def test_three_d_paths_refuse_other_starts(records, tmp_path):
     with pytest.raises(ValueError, match="same positions"):
         three_d.build_three_d_paths({"smart": tmp_path / "moved.npz", "STO": records["sto"]},
                                     tmp_path / "p.png")
+
+
+def test_swimrl_figures_names_draw_from_the_study_dir(records, tmp_path):
+    """threeDKu / threeDPaths / threeDMaps as ``swimrl-figures`` builds them: pending without
+    records, drawn from ``<three_d>/compare`` and ``<three_d>/paths`` with them."""
+    import shutil
+    from types import SimpleNamespace
+
+    cfg = SimpleNamespace(three_d=tmp_path / "3d", results=tmp_path / "2d", out=tmp_path / "fig")
+    for build in (three_d.build_three_d_ku_figure, three_d.build_three_d_paths_figure,
+                  three_d.build_three_d_maps_figure):
+        assert "pending" in build(cfg)
+    _comparison(tmp_path / "3d" / "compare", "ku10", [("sto", 0.4), ("policy(a)", 0.5)])
+    for name, src in (("ku10_policy", "naive"), ("ku10_sto", "sto")):
+        (tmp_path / "3d" / "paths" / name).mkdir(parents=True)
+        shutil.copy(records[src], tmp_path / "3d" / "paths" / name / "trajectories.npz")
+    assert three_d.build_three_d_ku_figure(cfg)["3D"]["ku10"]["smart"]["R_hat"] == 0.5
+    assert "R_hat" in three_d.build_three_d_paths_figure(cfg)
+    assert "correlations" in three_d.build_three_d_maps_figure(cfg)
+    assert {p.name for p in (tmp_path / "fig").iterdir()} == {
+        "threeDKu.png", "threeDPaths.png", "threeDMaps.png"}

@@ -12,6 +12,7 @@ from .mechanism import build_ku01, build_ku_inf, build_ku_pattern
 from .records import FiguresConfig
 from .robustness import build_robustness, build_robustness_noise
 from .stochastic import build_smart_performance, build_swimmer
+from .three_d import build_three_d_ku_figure, build_three_d_maps_figure, build_three_d_paths_figure
 from .training import build_training_curves
 from .videos import build_videos
 
@@ -31,6 +32,9 @@ BUILDERS: dict[str, Callable[[FiguresConfig], dict]] = {
     "beyondTarget": build_beyond_target,
     "beyondTargetPaths": build_beyond_target_paths,
     "beyondEnergy": build_beyond_energy,
+    "threeDKu": build_three_d_ku_figure,
+    "threeDPaths": build_three_d_paths_figure,
+    "threeDMaps": build_three_d_maps_figure,
 }
 
 

@@ -30,7 +30,7 @@ def figures_config(cfg: DictConfig) -> FiguresConfig:
         out=path(cfg.out), cache=path(cfg.cache), runtime=rt, flow=flow_spec(cfg.flow, rt),
         params=env_params(cfg), results=path(cfg.results), curves=path(cfg.curves),
         fits=path(cfg.fits), ablation=path(cfg.ablation), records=path(cfg.records),
-        beyond=path(cfg.beyond),
+        beyond=path(cfg.beyond), three_d=path(cfg.three_d),
         dns=None if cfg.dns is None else dns_figures_config(cfg.dns, path),
     )
 

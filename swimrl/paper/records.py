@@ -73,7 +73,7 @@ from swimrl.runtime import Runtime
 #: The figures, in build order (the keys of :data:`swimrl.paper.build.BUILDERS`).
 FIGURES = ("swimmer", "smartPerformance", "ku0.1", "kuInf", "ku_pattern", "trainingCurves",
            "ablation", "robustness-noise", "robustness", "dnsFlow", "videos", "beyondTarget",
-           "beyondTargetPaths", "beyondEnergy")
+           "beyondTargetPaths", "beyondEnergy", "threeDKu", "threeDPaths", "threeDMaps")
 #: The figures that keep a record ``<records>/<figure>.json`` (:func:`figure_record`).
 RECORDED = ("smartPerformance", "ku0.1", "kuInf", "ku_pattern", "ablation", "robustness-noise",
             "robustness")
@@ -209,6 +209,9 @@ class FiguresConfig:
     beyond: Path
     """Comparisons of the tasks beyond the paper (``target/ku<KU>_D<D>/``, ``energy/ku<KU>/``;
     :mod:`.beyond`)."""
+    three_d: Path
+    """The 3D study's records (``compare/ku<KU>/``, ``paths/ku10_<strategy>/``;
+    :mod:`.three_d`)."""
     progress: bool
 
     def __post_init__(self) -> None:
@@ -362,6 +365,15 @@ def ku_evaluation(cfg: FiguresConfig, kubo: float) -> Evaluation:
                       {"smart": smart_policy(cfg, kubo), "naive": "naive", "STO": "sto"})
 
 
+def frame_lambda(lam: np.ndarray) -> np.ndarray:
+    """``Lambda`` ``(F, K, S, N)`` at the video frames ``0, m, 2m, ..., N`` (``m`` =
+    :data:`FRAME_EVERY`): the shape held from each frame on (the last decision's at
+    ``t = T``), ``(K, F, S, frames)``."""
+    n = lam.shape[-1]
+    idx = np.minimum(np.arange(0, n + 1, FRAME_EVERY), n - 1)
+    return np.swapaxes(lam[..., idx], 0, 1)
+
+
 def ku_record(cfg: FiguresConfig, kubo: float) -> dict[str, np.ndarray]:
     """Smart (shipped policy), naive and STO at ``kubo`` on shared flows (cached):
     ``final`` ``(3, F S, 2)`` displacements, ``R_hat`` ``(3, F S)``, ``per_flow`` ``(3, F)``,
@@ -369,7 +381,8 @@ def ku_record(cfg: FiguresConfig, kubo: float) -> dict[str, np.ndarray]:
     ``n_traj`` swimmers of each flow (``sto_signals``, ``sto_Lambda``); for the videos,
     ``cloud`` ``(3, F S, frames, 2)`` displacements and ``traj_abs`` ``(3, n_traj, frames,
     2)`` unwrapped positions in flow 0 every :data:`FRAME_EVERY` decisions, with that flow's
-    ``vorticity`` ``(frames, n/4, n/4)`` and ``box``."""
+    ``vorticity`` ``(frames, n/4, n/4)`` and ``box``; the shape factors at those frames:
+    ``traj_lambda`` ``(3, n_traj, frames)``, ``cloud_lambda`` ``(3, F S, frames)``."""
     ev = ku_evaluation(cfg, kubo)
     setup, actors = ev.setup, list(ev.actors.values())
 
@@ -380,6 +393,7 @@ def ku_record(cfg: FiguresConfig, kubo: float) -> dict[str, np.ndarray]:
         k, f, s = per.shape[:3]
         nt = min(cfg.n_traj, s)
         r_hat = np.swapaxes(a["R_hat"], 0, 1)  # (K, F, S)
+        lam = frame_lambda(a["Lambda"])  # (K, F, S, frames)
         return {"final": per[..., -1, :].reshape(k, f * s, 2),
                 "R_hat": r_hat.reshape(k, f * s), "per_flow": r_hat.mean(-1),
                 "traj": per[:, 0, :nt], "time": a["time"],
@@ -387,9 +401,11 @@ def ku_record(cfg: FiguresConfig, kubo: float) -> dict[str, np.ndarray]:
                 "sto_Lambda": a["Lambda"][:, 2, :nt].reshape(f * nt, -1),
                 "cloud": per[..., ::FRAME_EVERY, :].reshape(k, f * s, -1, 2),
                 "traj_abs": np.swapaxes(a["position"], 0, 1)[:, 0, :nt, ::FRAME_EVERY],
+                "traj_lambda": lam[:, 0, :nt], "cloud_lambda": lam.reshape(k, f * s, -1),
                 "vorticity": a["vorticity"], "box": a["box"]}
 
-    inputs = {**cache_inputs(cfg, setup, actors), "frames": FRAME_EVERY, "n_traj": cfg.n_traj}
+    inputs = {**cache_inputs(cfg, setup, actors), "frames": FRAME_EVERY, "n_traj": cfg.n_traj,
+              "frame_lambda": 1}
     return cached(cfg, f"ku_{ku_name(kubo)}", inputs, compute)
 
 

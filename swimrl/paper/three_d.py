@@ -24,6 +24,7 @@ from swimrl.flows.labels import ku_name, parse_ku_name
 from swimrl.physics.signals3d import SIGNAL_NAMES_3D
 from swimrl.policies.baselines import StrategyLabel
 
+from .records import FiguresConfig
 from .style import COLORS, save
 
 #: ``<Lambda>`` of a map bin with fewer decisions is not drawn.
@@ -205,3 +206,35 @@ def build_three_d_maps(record: Path, path: Path) -> dict:
     return {"path": str(path), "correlations": corr, "pairs": pairs,
             "decisions": int(lam.size)}
 
+
+
+# -- swimrl-figures (cfg.three_d: the study's records) -------------------------------------
+#: The trajectory records of threeDPaths and threeDMaps, under ``<three_d>/paths/``.
+PATH_RECORDS = {"smart": "ku10_policy", "STO": "ku10_sto"}
+
+
+def _trajectories(cfg: FiguresConfig, name: str) -> Path:
+    return Path(cfg.three_d) / "paths" / PATH_RECORDS[name] / "trajectories.npz"
+
+
+def build_three_d_ku_figure(cfg: FiguresConfig) -> dict:
+    """Fig. threeDKu from ``cfg.results`` (2D) and ``<three_d>/compare`` (3D)."""
+    return build_three_d_ku(cfg.results, Path(cfg.three_d) / "compare",
+                            Path(cfg.out) / "threeDKu.png")
+
+
+def build_three_d_paths_figure(cfg: FiguresConfig) -> dict:
+    """Fig. threeDPaths from ``<three_d>/paths/ku10_policy`` and ``ku10_sto``."""
+    records = {name: _trajectories(cfg, name) for name in PATH_RECORDS}
+    missing = [str(p) for p in records.values() if not p.is_file()]
+    if missing:
+        return {"pending": f"no {', '.join(missing)}"}
+    return build_three_d_paths(records, Path(cfg.out) / "threeDPaths.png")
+
+
+def build_three_d_maps_figure(cfg: FiguresConfig) -> dict:
+    """Fig. threeDMaps from ``<three_d>/paths/ku10_policy``."""
+    record = _trajectories(cfg, "smart")
+    if not record.is_file():
+        return {"pending": f"no {record}"}
+    return build_three_d_maps(record, Path(cfg.out) / "threeDMaps.png")

@@ -1,9 +1,15 @@
 r"""The paper's supplemental videos (MP4, Matplotlib + the ffmpeg of ``imageio-ffmpeg``).
 
 * :func:`video_trajectories` (videos 1-4): a few swimmers of each strategy over the evolving
-  vorticity of their flow (tiled periodically), inset: their mean distance from the start.
+  vorticity of their flow (tiled periodically), inset: their mean distance from the start;
+  each swimmer's head a dot coloured by the shape factor ``Lambda`` it holds (where the
+  record has it: the stochastic flows' records do, the DNS replay record does not).
 * :func:`video_cloud` (videos 6-9): the displacements of all recorded swimmers (a dispersion
-  cloud from the origin), inset: the ensemble-mean distance from the start.
+  cloud from the origin), inset: the ensemble-mean distance from the start; the shape
+  read-out per strategy, ``<Lambda>`` and ``P(Lambda > 0)`` (prolate) at each frame.
+
+Each video's last frame is also written as a PNG still (``stills``: committed in
+``docs/figures/videos/``; the MP4s are not).
 
 Both take the arrays of :func:`swimrl.paper.records.ku_record` (or of the DNS
 replay record, :func:`swimrl.paper.dns.dns_record`) and return what they drew;
@@ -52,7 +58,7 @@ def _distance_inset(fig, ax, t: np.ndarray, dist: np.ndarray, unit: str):
 
 
 def video_trajectories(rec: dict, flow: float | str, path: Path, fps: int = 8,
-                       unit: str = r"\ell_f") -> dict:
+                       unit: str = r"\ell_f", still: Path | None = None) -> dict:
     """Videos 1-5 from ``rec['traj_abs']`` and ``rec['vorticity']``."""
     from matplotlib.animation import FuncAnimation
 
@@ -82,6 +88,15 @@ def video_trajectories(rec: dict, flow: float | str, path: Path, fps: int = 8,
     ax.legend(fontsize=7, loc="lower right")
     fig.colorbar(im, ax=ax, shrink=0.7, label=r"$\omega\tau_K$")
     marks = _distance_inset(fig, ax, t, dist, unit)
+    lam = rec.get("traj_lambda")
+    heads = None
+    if lam is not None:
+        heads = ax.scatter(traj[:, :, 0, 0].ravel(), traj[:, :, 0, 1].ravel(),
+                           c=lam[:, :, 0].ravel(), cmap="coolwarm", vmin=-1, vmax=1, s=22,
+                           edgecolors=[COLORS[name] for name in RECORD_STRATEGIES
+                                       for _ in range(traj.shape[1])], linewidths=1.2,
+                           zorder=5)
+        fig.colorbar(heads, ax=ax, shrink=0.5, pad=0.01, label=r"$\Lambda$ (head dots)")
     title = ax.set_title("", fontsize=9)
     fig.tight_layout()
 
@@ -91,14 +106,17 @@ def video_trajectories(rec: dict, flow: float | str, path: Path, fps: int = 8,
             for i, line in enumerate(row):
                 line.set_data(traj[j, i, : f + 1, 0], traj[j, i, : f + 1, 1])
             marks[j].set_data(t[f: f + 1], dist[j, f: f + 1])
+        if heads is not None:
+            heads.set_offsets(traj[:, :, f].reshape(-1, 2))
+            heads.set_array(lam[:, :, f].ravel())
         title.set_text(f"{ku_display(flow)}, t = {t[f]:.0f} $\\tau_K$")
 
-    _save(fig, FuncAnimation(fig, frame, frames=n), path, fps)
+    _save(fig, FuncAnimation(fig, frame, frames=n), path, fps, still, lambda: frame(n - 1))
     return {"frames": n, "extent": extent, "distance": dist[:, -1].tolist()}
 
 
 def video_cloud(rec: dict, flow: float | str, path: Path, fps: int = 8,
-                unit: str = r"\ell_f") -> dict:
+                unit: str = r"\ell_f", still: Path | None = None) -> dict:
     """Videos 6-10 from ``rec['cloud']`` (``(3, S, frames, 2)``)."""
     from matplotlib.animation import FuncAnimation
 
@@ -120,6 +138,12 @@ def video_cloud(rec: dict, flow: float | str, path: Path, fps: int = 8,
     ax.set_ylabel(f"$\\Delta y/{unit}$")
     ax.legend(fontsize=7, loc="lower right", markerscale=4)
     marks = _distance_inset(fig, ax, t, dist, unit)
+    lam = rec.get("cloud_lambda")
+    readout = None
+    if lam is not None:
+        readout = ax.text(0.98, 0.98, "", transform=ax.transAxes, ha="right", va="top",
+                          fontsize=7, family="monospace",
+                          bbox={"facecolor": "white", "alpha": 0.85, "lw": 0})
     title = ax.set_title("", fontsize=9)
     fig.tight_layout()
 
@@ -127,21 +151,28 @@ def video_cloud(rec: dict, flow: float | str, path: Path, fps: int = 8,
         for j, d in enumerate(dots):
             d.set_data(cloud[j, :, f, 0], cloud[j, :, f, 1])
             marks[j].set_data(t[f: f + 1], dist[j, f: f + 1])
+        if readout is not None:
+            readout.set_text("\n".join(
+                f"{name:>5}: <Λ> {lam[j, :, f].mean():+.2f}, P(Λ>0) {(lam[j, :, f] > 0).mean():.2f}"
+                for j, name in enumerate(RECORD_STRATEGIES)))
         title.set_text(f"{ku_display(flow)}, {cloud.shape[1]} swimmers per strategy, "
                        f"t = {t[f]:.0f} $\\tau_K$")
 
-    _save(fig, FuncAnimation(fig, frame, frames=n), path, fps)
+    _save(fig, FuncAnimation(fig, frame, frames=n), path, fps, still, lambda: frame(n - 1))
     return {"frames": n, "mean_distance": dist[:, -1].tolist()}
 
 
 def build_videos(cfg: FiguresConfig) -> dict:
     """Supplemental videos 1-4 (trajectories) and 6-9 (clouds) into ``<out>/../videos``, and
     5 and 10 in the DNS from its replay record."""
-    out, where = {}, Path(cfg.out).parent / "videos"
+    out, where, stills = {}, Path(cfg.out).parent / "videos", Path(cfg.out) / "videos"
     for i, kubo in enumerate(KUS):
         rec = ku_record(cfg, kubo)
-        out[i + 1] = video_trajectories(rec, kubo, where / f"video{i + 1}_{ku_name(kubo)}.mp4")
-        out[i + 6] = video_cloud(rec, kubo, where / f"video{i + 6}_{ku_name(kubo)}_cloud.mp4")
+        name = f"video{i + 1}_{ku_name(kubo)}"
+        out[i + 1] = video_trajectories(rec, kubo, where / f"{name}.mp4",
+                                        still=stills / f"{name}.png")
+        name = f"video{i + 6}_{ku_name(kubo)}_cloud"
+        out[i + 6] = video_cloud(rec, kubo, where / f"{name}.mp4", still=stills / f"{name}.png")
     if cfg.dns is None:
         rec, why = None, "no dns.* records configured"
     elif stale := shipped_before_pending(cfg.dns):
@@ -151,13 +182,21 @@ def build_videos(cfg: FiguresConfig) -> dict:
     if rec is None:
         out["pending"] = f"videos 5, 10: {why}"
     else:
-        out[5] = video_trajectories(rec, "DNS", where / "video5_dns.mp4", unit="L")
-        out[10] = video_cloud(rec, "DNS", where / "video10_dns_cloud.mp4", unit="L")
+        out[5] = video_trajectories(rec, "DNS", where / "video5_dns.mp4", unit="L",
+                                    still=stills / "video5_dns.png")
+        out[10] = video_cloud(rec, "DNS", where / "video10_dns_cloud.mp4", unit="L",
+                              still=stills / "video10_dns_cloud.png")
     return out
 
 
-def _save(fig, anim, path: Path, fps: int) -> None:
+def _save(fig, anim, path: Path, fps: int, still: Path | None = None,
+          last=None) -> None:
+    """The MP4 at ``path``; with ``still``, the last frame (``last()`` draws it) as a PNG."""
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
     anim.save(str(path), writer=_writer(fps), dpi=100)  # even pixel sizes (yuv420p)
+    if still is not None:
+        last()
+        Path(still).parent.mkdir(parents=True, exist_ok=True)
+        fig.savefig(still, dpi=80)
     pyplot().close(fig)
