@@ -96,7 +96,8 @@ def video_trajectories(rec: dict, flow: float | str, path: Path, fps: int = 8,
                            edgecolors=[COLORS[name] for name in RECORD_STRATEGIES
                                        for _ in range(traj.shape[1])], linewidths=1.2,
                            zorder=5)
-        fig.colorbar(heads, ax=ax, shrink=0.5, pad=0.01, label=r"$\Lambda$ (head dots)")
+        fig.colorbar(heads, ax=ax, orientation="horizontal", location="top", shrink=0.45,
+                     pad=0.02, aspect=30, label=r"$\Lambda$ (head dots)")
     title = ax.set_title("", fontsize=9)
     fig.tight_layout()
 
