@@ -142,3 +142,52 @@ def test_energy_baselines_join_the_energy_record_on_the_same_flows(tmp_path):
     record(tmp_path / "energy_baselines" / "ku10", ["sto(+0.60,-0.00)"], seed=1)
     with pytest.raises(ValueError, match="energy_baselines/ku10/comparison.json: not the flows"):
         beyond.read_energy(tmp_path)
+
+
+def _target_row(label, arrived, half, with_cdf=True):
+    row = {"label": label, "arrival_mean": arrived, "arrival_sem": 0.01,
+           "arrival_time_median": 3.0, "n_arrived": 10}
+    if with_cdf:
+        t = np.linspace(0.5, 10.0, 20)
+        row.update(arrival_cdf_t=t.tolist(),
+                   arrival_cdf_mean=(arrived * t / 10.0).tolist(),
+                   arrival_cdf_sem=[0.01] * 20, arrival_time_half=half,
+                   arrival_time_rmst_mean=7.5, arrival_time_rmst_sem=0.2,
+                   arrival_time_quartile=None)
+    return row
+
+
+def _target_record(path, d, with_cdf):
+    path.mkdir(parents=True)
+    rows = [_target_row("sto", 0.8, 6.2, with_cdf), _target_row("naive(+0.98)", 0.01, None,
+                                                                 with_cdf),
+            _target_row("naive(-0.98)", 0.02, None, with_cdf),
+            _target_row("policy(pretrained/ku10)", 0.3, None, with_cdf),
+            _target_row("policy(runs/target_ku10_seed0)", 0.9, 5.0, with_cdf),
+            _target_row("policy(runs/target_ku10_seed1)", 0.4, None, with_cdf)]
+    rec = {"task": "target", "target_distance": d, "arrival_radius": 1.0, "n_flows": 4,
+           "n_swimmers": 10, "seed": 0, "config": {"episode": {"duration": 10.0}}, "rows": rows}
+    (path / "comparison.json").write_text(json.dumps(rec))
+
+
+@pytest.mark.parametrize("with_cdf", [True, False])
+def test_target_figure_draws_the_arrival_time_cdf_where_recorded(figures, tmp_path, with_cdf):
+    """Records with the arrival-time distribution: the CDF at D = 20 below, and the half and
+    restricted mean times in the table; records without: the median of the arrived, ``—``."""
+    for d in (10.0, 20.0, 40.0):
+        _target_record(tmp_path / "beyond" / "target" / f"ku10_D{d:g}", d, with_cdf)
+    out = beyond.build_beyond_target(figures)
+    assert (tmp_path / "fig" / "beyondTarget.png").is_file()
+    assert out["cdf_distance"] == {10.0: 20.0 if with_cdf else None}
+    table = (tmp_path / "fig" / "beyondTarget.md").read_text()
+    assert "time by which half arrived (τ_K)" in table
+    assert "median arrival time of the arrived (τ_K)" in table
+    smart = out["summary"][10.0]["20.0"]["smart (target)"]
+    if with_cdf:
+        assert "| Ku = 10 | 20 | target-STO | 0.800 ± 0.010 | 6.2 | 7.5 ± 0.2 | 3.0 |" in table
+        assert "| best naive | 0.020 ± 0.010 | > T | 7.5 ± 0.2 |" in table
+        assert "| smart (target) | 0.650 ± 0.354 | 5.0 / > T (per seed) | 7.5 ± 0.0 |" in table
+        assert [len(v["cdf"]) for v in smart["values"]] == [20, 20]
+    else:
+        assert "| Ku = 10 | 20 | target-STO | 0.800 ± 0.010 | — | — | 3.0 |" in table
+        assert "| smart (target) | 0.650 ± 0.354 | — | — | 3.0 |" in table

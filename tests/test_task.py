@@ -6,6 +6,7 @@ import json
 import math
 from pathlib import Path
 
+import numpy as np
 import pytest
 import torch
 from tensordict import TensorDict
@@ -18,6 +19,7 @@ from swimrl.evaluation.compare import compare
 from swimrl.flows.stochastic import StochasticFlow
 from swimrl.physics.energy import drag_factor
 from swimrl.policies.baselines import NaiveShape, ShortTimeOptimal, StrategyLabel, as_actor
+from swimrl.runs.records import comparison_markdown
 from swimrl.task import RewardSpec, TaskSpec
 
 from .conftest import SMALL
@@ -175,6 +177,18 @@ def test_target_comparison_metrics(compose_cfg):
         assert 0 < row["energy_mean"] < 1.84
         if row["n_arrived"]:
             assert 0 < row["arrival_time_median"] <= 6.0
+        # the arrival-time CDF over all swimmers (Kaplan-Meier, censored at T = 6)
+        cdf = np.asarray(row["arrival_cdf_mean"])
+        assert len(cdf) == len(row["arrival_cdf_t"]) == len(row["arrival_cdf_sem"])
+        assert row["arrival_cdf_t"][-1] == pytest.approx(6.0)
+        assert cdf[-1] == pytest.approx(row["arrival_mean"], abs=1e-12)
+        assert np.all(np.diff(cdf) >= 0)
+        assert 0 < row["arrival_time_rmst_mean"] <= 6.0
+        half = row["arrival_time_half"]
+        assert (half is None) == (row["arrival_mean"] < 0.5)
+        if row["n_arrived"]:
+            assert row["arrival_time_mean"] <= row["arrival_time_rmst_mean"] + 1e-9
+    assert "half arrived by (tau_K)" in comparison_markdown(record)
     sto, naive = record["rows"]
     assert sto["arrival_minus_first"] == 0.0
     difference = naive["arrival_mean"] - sto["arrival_mean"]

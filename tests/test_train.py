@@ -159,13 +159,41 @@ def test_validation_precedes_compute(train_cfg, tmp_path, monkeypatch):
         ("swimmer.swim_speed=-1", "swimmer.swim_speed"),
         ("signals.names=[n_r,foo]", "signals.names"),
         ("eval.n_flows=0", "eval.n_flows"),
+        ("train.init_policy=no/such/policy", "train.init_policy"),
+        ("train.init_policy=pretrained/ku10 model.hidden=[32]", "train.init_policy"),
+        ("train.init_policy=pretrained/ku10 signals=nth_snp", "train.init_policy"),
+        ("train.actor_frozen_updates=-1", "train.actor_frozen_updates"),
+        ("train.actor_frozen_updates=4", "train.actor_frozen_updates"),
     ],
 )
 def test_bad_config_names_the_key(train_cfg, override, key):
     with pytest.raises(ValueError) as err:
-        validate_train_cfg(train_cfg(override))
+        validate_train_cfg(train_cfg(*override.split()))
     msg = str(err.value)
     assert key in msg and "\n" not in msg
+
+
+def test_warm_start_keeps_the_actor_while_the_critic_learns_alone(train_cfg, tmp_path):
+    """``train.init_policy``: the run starts from the policy's actor weights; for
+    ``train.actor_frozen_updates`` updates they stay exactly as loaded (actor rate 0) while
+    the critic learns, then the actor trains."""
+    from swimrl.runs.policy_files import resolve_policy_file
+
+    warm = ["train.init_policy=pretrained/ku10", "train.actor_frozen_updates=2",
+            "train.eval_every=0"]
+    init = load_file(resolve_policy_file("pretrained/ku10"))["actor"]
+    assert train(train_cfg(*warm, "train.stop_after_updates=2"), tmp_path) is None
+    ck = load_file(RunLayout(tmp_path).checkpoint)
+    assert ck["counters"]["updates"] == 2
+    assert all(torch.equal(ck["actor"][k], v) for k, v in init.items())
+    fresh = PPOTrainer(train_config(train_cfg(*warm)), make_plan(train_config(train_cfg(*warm))),
+                       tmp_path / "fresh")
+    assert any(not torch.equal(ck["critic"][k], v)
+               for k, v in fresh.critic.state_dict().items())  # the critic learnt
+    fresh.close()
+    train(train_cfg(*warm, "resume=true"), tmp_path)
+    after = load_file(RunLayout(tmp_path).checkpoint)["actor"]
+    assert any(not torch.equal(after[k], v) for k, v in init.items())  # then the actor
 
 
 def test_plan_and_reward_scale(train_cfg):

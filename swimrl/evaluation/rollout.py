@@ -252,7 +252,8 @@ def evaluate_shared(setup: RunSpec, actors: Sequence[Actor], desc: str = "eval",
         records = [store_record(p) for p in setup.flow.paths]
         store = {"flow_store": records[0]} if len(records) == 1 else {"flow_stores": records}
     outcomes = [outcome_statistics([chunk.get("outcomes", [{}] * k)[j] for chunk in results],
-                                   params.update_interval) for j in range(k)]
+                                   params.update_interval, params.n_decisions)
+                for j in range(k)]
     task = {"task": params.task.name}
     if params.task.target:
         task.update(target_distance=params.task.distance,

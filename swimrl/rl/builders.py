@@ -17,6 +17,7 @@ scaled.
 
 from __future__ import annotations
 
+import logging
 from typing import NamedTuple
 
 import torch
@@ -33,7 +34,10 @@ from swimrl.flows.build import FlowSpec
 from swimrl.policies.networks import ModelSpec, actor_critic
 from swimrl.rl.plan import LossSettings, TrainConfig, TrainPlan, TrainSettings
 from swimrl.runs.layout import RunLayout
+from swimrl.runs.policy_files import initial_actor_weights, sha256_file
 from swimrl.runtime import Runtime
+
+log = logging.getLogger(__name__)
 
 
 def auto_reward_scale(env: SwimmerEnv, gamma: float) -> float:
@@ -135,7 +139,8 @@ class Agent(NamedTuple):
 def make_agent(cfg: TrainConfig, plan: TrainPlan, env: EnvBase) -> Agent:
     r"""The :class:`Agent` of a training run on ``env``, each piece under its comment.
 
-    * actor and critic: :func:`make_actor_critic` (``model.*``);
+    * actor and critic: :func:`make_actor_critic` (``model.*``); the actor's weights from
+      ``train.init_policy`` where one is given (a warm start; the critic starts fresh);
     * ``GAE`` (``A_i = sum_k (gamma lambda)^k delta_{i+k}``, ``delta_i = r_i + gamma
       V(s_{i+1}) - V(s_i)``, bootstrapped at truncation since ``terminated`` is never set;
       :class:`FiniteObservationGAE`), its critic evaluated in chunks of ``train.gae_chunk``
@@ -146,11 +151,16 @@ def make_agent(cfg: TrainConfig, plan: TrainPlan, env: EnvBase) -> Agent:
       ``sota-implementations/ppo``), so a captured step reads the scheduled rate;
     * their schedulers: rate ``lr_0 (1 - u / n_updates)`` at update ``u``
       (``optim.anneal=linear``, reaching ``lr_0 / n_updates`` at the last update) or constant
-      (``none``), stepped once per update.
+      (``none``), stepped once per update; the actor's rate is 0 for the first
+      ``train.actor_frozen_updates`` updates (the critic learns alone).
     """
     rt, t, loss, optim = cfg.runtime, cfg.train, cfg.loss, cfg.optim
-    # actor and critic
+    # actor and critic (the actor from train.init_policy's weights, a warm start)
     actor, critic = make_actor_critic(cfg.model, env, rt)
+    if t.init_policy is not None:
+        path, weights = initial_actor_weights(t.init_policy, cfg.params, cfg.model)
+        actor.load_state_dict(weights)
+        log.info("actor initialised from %s (sha256 %s)", path, sha256_file(path)[:12])
     # the advantage and the loss
     gae = FiniteObservationGAE(
         gamma=loss.gamma,
@@ -189,7 +199,10 @@ def make_agent(cfg: TrainConfig, plan: TrainPlan, env: EnvBase) -> Agent:
         def factor(u: int) -> float:
             return 1.0
 
-    schedulers = [LambdaLR(opt, factor) for opt in optimizers]
+    def actor_factor(u: int) -> float:  # rate 0 while the critic learns alone
+        return 0.0 if u < t.actor_frozen_updates else factor(u)
+
+    schedulers = [LambdaLR(optimizers[0], actor_factor), LambdaLR(optimizers[1], factor)]
     return Agent(actor, critic, ppo, gae, optimizers, schedulers)
 
 

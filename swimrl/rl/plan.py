@@ -37,6 +37,7 @@ from swimrl.errors import as_bool, as_float, as_int, keep_number_types, one_of, 
 from swimrl.evaluation.rollout import SWIMMER_BYTES
 from swimrl.flows.build import FLOW_WORK_BYTES, FlowSpec, flow_table_bytes
 from swimrl.policies.networks import ModelSpec
+from swimrl.runs.policy_files import initial_actor_weights
 from swimrl.runs.spec import RunSpec
 from swimrl.runtime import RUNTIME, Runtime, check_memory
 
@@ -80,6 +81,9 @@ class TrainSettings:
     gae_chunk: int | None = field(metadata=RUNTIME)
     compare_baselines: bool = field(metadata=RUNTIME)
     stagger: int  # groups of flows with offset episodes (SwimmerEnv.stagger)
+    # warm start: the policy whose actor weights start the run (None: random initialisation)
+    init_policy: str | None
+    actor_frozen_updates: int  # the first updates step the critic only
 
     @property
     def frames_per_batch(self) -> int:
@@ -123,6 +127,15 @@ class TrainSettings:
         as_bool(k("compare_baselines"), self.compare_baselines)
         require(as_int(k("stagger"), self.stagger) <= n_flows, k("stagger"), self.stagger,
                 f"an integer in [1, train.n_flows={n_flows}]")
+        if self.init_policy is not None:
+            object.__setattr__(self, "init_policy", str(self.init_policy))
+            require(bool(self.init_policy.strip()), k("init_policy"), self.init_policy,
+                    "null or a policy: pretrained/NAME, a run directory or a policy file")
+        n_updates = total // fpb
+        require(as_int(k("actor_frozen_updates"), self.actor_frozen_updates, low=0) < n_updates,
+                k("actor_frozen_updates"), self.actor_frozen_updates,
+                f"an integer in [0, {n_updates}) (the run's updates, "
+                f"train.total_frames // frames per update)")
         keep_number_types(self)
 
 
@@ -228,6 +241,8 @@ class TrainConfig:
         require(not self.train.cudagraphs or device.type == "cuda",
                 "train.cudagraphs", self.train.cudagraphs,
                 f"false on device={device} (CUDA graphs need device=cuda)")
+        if self.train.init_policy is not None:  # the warm start's file, signals and network
+            initial_actor_weights(self.train.init_policy, self.spec.params, self.model)
         lam_max = self.spec.params.shape_factor_max
         require(not self.train.compare_baselines or lam_max >= 0.98,
                 "train.compare_baselines", self.train.compare_baselines,

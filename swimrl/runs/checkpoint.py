@@ -51,6 +51,8 @@ LEGACY_KEYS = {
 ADDED_KEYS = {
     "*": {"model.min_std": NO_STD_BOUND,  # every flow
           "train.stagger": 1,
+          "train.init_policy": None,  # random initialisation
+          "train.actor_frozen_updates": 0,
           "optim.lr_scale": "none",  # the rates as given
           "optim.lr_reference_minibatch": 2560,
           "task": {"name": "displacement", "distance": 20.0, "arrival_radius": 1.0},

@@ -205,6 +205,31 @@ def check_signals(spec: str, trained: list[str], signals: tuple[str, ...]) -> No
         )
 
 
+def initial_actor_weights(spec: str, params: EnvParams, model) -> tuple[Path, dict]:
+    """The file and actor weights of ``train.init_policy=spec`` (a warm start), checked
+    against the run: the same signals (``params.signals``) and the same network
+    (``model.hidden``, ``model.activation``: a :class:`~swimrl.policies.networks.ModelSpec`);
+    a one-line :class:`~swimrl.errors.ConfigError` naming ``train.init_policy`` otherwise."""
+    try:
+        path = resolve_policy_file(spec)
+    except FileNotFoundError as err:
+        raise ConfigError(f"train.init_policy: {err}") from None
+    data = load_file(path, map_location="cpu")
+    try:
+        check_signals(spec, data["signals"], params.signals)
+    except ConfigError as err:
+        raise ConfigError(f"train.init_policy: {err}") from None
+    saved = data["model"]
+    have = ([int(h) for h in saved["hidden"]], str(saved["activation"]))
+    want = ([int(h) for h in model.hidden], str(model.activation))
+    if have != want:
+        raise ConfigError(
+            f"train.init_policy={spec!r} has hidden={have[0]}, activation={have[1]!r}; the run "
+            f"builds model.hidden={want[0]}, model.activation={want[1]!r}: set those to match"
+        )
+    return path, data["actor"]
+
+
 def load_policy(spec: str, params: EnvParams) -> TensorDictModule:
     """Deterministic actor ``observation -> action`` of the policy named by ``spec``, checked
     against the evaluation's signals ``params.signals``. The actor keeps the bound

@@ -133,7 +133,7 @@ def comparison_markdown(record: dict) -> str:
             row.append(f"{r['energy_mean']:.4f} +- {r['energy_sem']:.4f}")
     if all("arrival_mean" in r for r in record["rows"]):
         head += ["arrived (mean +- SEM)", f"arrived - {first} (paired)",
-                 "arrival time mean / median (tau_K)", "final distance (ell_f)"]
+                 "arrival time mean / median of the arrived (tau_K)", "final distance (ell_f)"]
         for row, r in zip(rows, record["rows"], strict=True):
             times = ("-" if r["arrival_time_mean"] is None else
                      f"{r['arrival_time_mean']:.1f} / {r['arrival_time_median']:.1f}")
@@ -141,6 +141,13 @@ def comparison_markdown(record: dict) -> str:
                     f"{r['arrival_minus_first']:+.4f} +- {r['arrival_minus_first_sem']:.4f}",
                     times,
                     f"{r['final_distance_mean']:.2f} +- {r['final_distance_sem']:.2f}"]
+        if all("arrival_time_rmst_mean" in r for r in record["rows"]):
+            # censoring-aware (every swimmer counts): F(t) = 1/2, E[min(t_arrival, T)]
+            head += ["half arrived by (tau_K)", "restricted mean time (tau_K)"]
+            for row, r in zip(rows, record["rows"], strict=True):
+                half = r["arrival_time_half"]
+                row += ["> T" if half is None else f"{half:.1f}",
+                        f"{r['arrival_time_rmst_mean']:.2f} +- {r['arrival_time_rmst_sem']:.2f}"]
     return title + markdown_table(head, rows)
 
 
