@@ -44,7 +44,10 @@ _TARGET_DIR = re.compile(r"ku(?P<ku>[^_]+)_D(?P<d>[0-9.]+)")
 _WEIGHT = re.compile(r"_w(?P<w>[0-9.eE+-]+)_seed(?P<seed>\d+)")
 #: The row kinds of a target comparison, as drawn (colour, marker).
 TARGET_KINDS = {"target-STO": (COLORS["STO"], "s"), "best naive": (COLORS["naive"], "v"),
-                "displacement policy": ("tab:blue", "D"), "smart (target)": (COLORS["smart"], "o")}
+                "displacement policy": ("tab:blue", "D"), "smart (target)": (COLORS["smart"], "o"),
+                "smart (warm start)": ("tab:purple", "^")}
+#: Kinds with one row per training seed: drawn per seed, summarised by the mean over seeds.
+SEEDED_KINDS = ("smart (target)", "smart (warm start)")
 
 
 def pareto_front(r_hat: np.ndarray, energy: np.ndarray) -> np.ndarray:
@@ -58,14 +61,18 @@ def pareto_front(r_hat: np.ndarray, energy: np.ndarray) -> np.ndarray:
 
 def row_kind(label: str) -> str | None:
     """What a target comparison's row is: ``target-STO``, a constant shape
-    (``naive``), the displacement policy (``pretrained/ku*``) or a target-trained policy."""
+    (``naive``), the displacement policy (``pretrained/ku*``), a target-trained policy, or
+    one trained on the target task from the displacement policy's weights (a run directory
+    named ``*_warm_*``, ``train.init_policy``)."""
     parsed = StrategyLabel.parse(label)
     if parsed.name == "sto":
         return "target-STO"
     if parsed.name == "naive":
         return "naive"
     if parsed.name == "policy":
-        return "displacement policy" if "pretrained/" in parsed.arg else "smart (target)"
+        if "pretrained/" in parsed.arg:
+            return "displacement policy"
+        return "smart (warm start)" if "_warm_" in parsed.arg else "smart (target)"
     return None
 
 
@@ -100,15 +107,17 @@ def target_summary(rec: dict) -> dict[str, dict]:
         kind = row_kind(r["label"])
         if kind in ("target-STO", "displacement policy"):
             out[kind] = {"label": r["label"], **_arrival(r)}
-    smart = [r for r in rec["rows"] if row_kind(r["label"]) == "smart (target)"]
-    if smart:
+    for seeded in SEEDED_KINDS:
+        smart = [r for r in rec["rows"] if row_kind(r["label"]) == seeded]
+        if not smart:
+            continue
         values = [_arrival(r) for r in smart]
 
-        def spread(key: str, one: str) -> float:
+        def spread(key: str, one: str, values=values) -> float:
             x = [v[key] for v in values]
             return float(np.std(x, ddof=1)) if len(x) > 1 else values[0][one]
 
-        out["smart (target)"] = {
+        out[seeded] = {
             "label": "; ".join(r["label"] for r in smart), "values": values,
             "arrival": float(np.mean([v["arrival"] for v in values])),
             "sem": spread("arrival", "sem"),
@@ -165,7 +174,7 @@ def _draw_cdf(ax, summary: dict, dist: float, episode: float | None) -> None:
         if kind not in summary or "cdf" not in summary[kind].get("values", [summary[kind]])[0]:
             continue
         s = summary[kind]
-        if kind == "smart (target)":
+        if kind in SEEDED_KINDS:
             for i, v in enumerate(s["values"]):
                 ax.plot(v["cdf_t"], v["cdf"], color=color, lw=0.9,
                         label=kind if i == 0 else None)
@@ -220,7 +229,7 @@ def build_beyond_target(cfg: FiguresConfig) -> dict:
                                   label=kind)
             if not cdf:
                 axes[1, col].plot(present, t, color=color, marker=marker, label=kind)
-            if kind == "smart (target)":
+            if kind in SEEDED_KINDS:
                 for x in present:
                     seeds = [v["arrival"] for v in summary[x][kind]["values"]]
                     axes[0, col].plot([x] * len(seeds), seeds, ".", color=color, alpha=0.5)
@@ -293,7 +302,9 @@ def build_beyond_target_paths(cfg: FiguresConfig) -> dict:
     if not recs:
         return _pending(cfg, "target/ku*_D*/comparison.json")
     plt = pyplot()
-    kinds = list(TARGET_KINDS)
+    middle = [by_d[list(by_d)[len(by_d) // 2]] for by_d in recs.values()]
+    present = set().union(*(path_actors(rec) for rec in middle))
+    kinds = [kind for kind in TARGET_KINDS if kind in present]  # a column per kind drawn
     fig, axes = plt.subplots(len(recs), len(kinds), figsize=(3.2 * len(kinds), 3.0 * len(recs)),
                              squeeze=False, layout="constrained")
     out: dict = {}
