@@ -96,7 +96,7 @@ def analyse(path: Path) -> dict:
             "ratio_theta_to_paper": _mean_sem(m_t / pred_w),
             "ratio_theta_to_model_rate": _mean_sem(m_t / pred_r),
         })
-    for a, b in zip(rows[:-1], rows[1:]):
+    for a, b in zip(rows[:-1], rows[1:], strict=True):
         for key in ("msd_int_omega", "msd_theta"):
             a[f"slope_{key}_to_next"] = float(np.log(b[key][0] / a[key][0])
                                               / np.log(b["tau_over_tau_K"] / a["tau_over_tau_K"]))
