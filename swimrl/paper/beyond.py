@@ -302,17 +302,16 @@ def build_beyond_target_paths(cfg: FiguresConfig) -> dict:
     if not recs:
         return _pending(cfg, "target/ku*_D*/comparison.json")
     plt = pyplot()
-    middle = [by_d[list(by_d)[len(by_d) // 2]] for by_d in recs.values()]
-    present = set().union(*(path_actors(rec) for rec in middle))
-    kinds = [kind for kind in TARGET_KINDS if kind in present]  # a column per kind drawn
+    middle = {ku: list(by_d)[len(by_d) // 2] for ku, by_d in recs.items()}
+    actors_of = {ku: path_actors(recs[ku][dist]) for ku, dist in middle.items()}
+    kinds = [kind for kind in TARGET_KINDS  # a column per kind drawn in some row
+             if any(kind in actors for actors in actors_of.values())]
     fig, axes = plt.subplots(len(recs), len(kinds), figsize=(3.2 * len(kinds), 3.0 * len(recs)),
                              squeeze=False, layout="constrained")
     out: dict = {}
     for row, (ku, by_d) in enumerate(recs.items()):
-        dists = list(by_d)
-        dist = dists[len(dists) // 2]
+        dist, actors = middle[ku], actors_of[ku]
         rec = by_d[dist]
-        actors = path_actors(rec)
         task = TaskSpec("target", distance=float(dist), arrival_radius=rec["arrival_radius"])
         setup = eval_setup(cfg, ku, 1, N_PATHS, task=task)
         names = list(actors.values())

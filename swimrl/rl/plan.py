@@ -90,6 +90,11 @@ class TrainSettings:
         """Frames (decisions) per PPO update: ``n_flows x n_swimmers x rollout_length``."""
         return self.n_flows * self.n_swimmers * self.rollout_length
 
+    @property
+    def n_updates(self) -> int:
+        """PPO updates of the run: ``total_frames // frames_per_batch``."""
+        return self.total_frames // self.frames_per_batch
+
     def __post_init__(self) -> None:
         def k(key: str) -> str:
             return f"train.{key}"
@@ -131,10 +136,9 @@ class TrainSettings:
             object.__setattr__(self, "init_policy", str(self.init_policy))
             require(bool(self.init_policy.strip()), k("init_policy"), self.init_policy,
                     "null or a policy: pretrained/NAME, a run directory or a policy file")
-        n_updates = total // fpb
-        require(as_int(k("actor_frozen_updates"), self.actor_frozen_updates, low=0) < n_updates,
-                k("actor_frozen_updates"), self.actor_frozen_updates,
-                f"an integer in [0, {n_updates}) (the run's updates, "
+        require(as_int(k("actor_frozen_updates"), self.actor_frozen_updates, low=0)
+                < self.n_updates, k("actor_frozen_updates"), self.actor_frozen_updates,
+                f"an integer in [0, {self.n_updates}) (the run's updates, "
                 f"train.total_frames // frames per update)")
         keep_number_types(self)
 
@@ -296,12 +300,11 @@ class TrainPlan:
 
 
 def make_plan(cfg: TrainConfig) -> TrainPlan:
-    """Derived sizes: ``n_updates = total // frames_per_batch`` (``F S L``, a property of the
-    settings), minibatches per epoch (default: a full pass), the learning rates, and the
+    """Derived sizes: ``n_updates = total // frames_per_batch`` (``F S L``; both properties
+    of the settings), minibatches per epoch (default: a full pass), the learning rates, and the
     training and evaluation seeds."""
     t = cfg.train
-    fpb = t.frames_per_batch
-    n_updates = t.total_frames // fpb
+    fpb, n_updates = t.frames_per_batch, t.n_updates
     n_mb = fpb // t.minibatch_size if t.minibatches_per_epoch is None else t.minibatches_per_epoch
     lr_actor, lr_critic = cfg.optim.rates_for(t.minibatch_size)
     return TrainPlan(
