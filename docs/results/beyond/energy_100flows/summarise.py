@@ -43,7 +43,9 @@ def main(path: Path) -> dict:
             weights.setdefault(key[0], {})[key[1]] = r
     r0 = np.mean([r["per_flow"] for r in weights["0"].values()], axis=0)
     e0 = np.mean([r["energy_per_flow"] for r in weights["0"].values()], axis=0)
-    out: dict = {"record": str(path), "n_flows": rec["n_flows"], "n_swimmers": rec["n_swimmers"],
+    full = path.resolve()
+    shown = str(full.relative_to(HERE)) if full.is_relative_to(HERE) else str(path)
+    out: dict = {"record": shown, "n_flows": rec["n_flows"], "n_swimmers": rec["n_swimmers"],
                  "seed": rec["seed"], "weights": {}, "family": [], "naive": []}
     variances = []
     for w in sorted(weights, key=float):
