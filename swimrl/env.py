@@ -267,6 +267,8 @@ class SwimmerEnv(EnvBase):
         self.arrival_step = torch.full(batch, -1, device=dev, dtype=torch.int64)
         #: ``E_hat`` so far: ``(1/T) int K(Lambda) dt`` (:mod:`swimrl.physics.energy`).
         self.energy = torch.zeros(batch, device=dev, dtype=dtype)
+        #: ``C_hat`` so far: ``(1/T) sum_i |Lambda_i - Lambda_{i-1}| T_u`` (the shape change).
+        self.shape_change = torch.zeros(batch, device=dev, dtype=dtype)
         #: The previous decision's ``Lambda`` (NaN before the first; the shape-change cost).
         self.last_action = torch.full(batch, math.nan, device=dev, dtype=dtype)
         #: Upper bound of ``max_x |u(x, t)|`` of each flow since its last reset, ``(F,)``.
@@ -496,11 +498,13 @@ class SwimmerEnv(EnvBase):
         Returns
         -------
         dict[str, torch.Tensor]
-            ``(F, S)`` each: ``energy`` (``E_hat``, :mod:`swimrl.physics.energy`) and, for
+            ``(F, S)`` each: ``energy`` (``E_hat``, :mod:`swimrl.physics.energy`),
+            ``shape_change`` (``C_hat = (1/T) sum_i |Lambda_i - Lambda_{i-1}| T_u``, the
+            quantity ``reward.shape_change_weight`` prices) and, for
             ``task=target``, ``arrived`` (0/1), ``arrival_time`` (units ``tau_K``; NaN where
             not arrived) and ``final_distance`` (``|X - x|``, units ``ell_f``).
         """
-        out = {"energy": self.energy.clone()}
+        out = {"energy": self.energy.clone(), "shape_change": self.shape_change.clone()}
         if self.task.target:
             time = self.arrival_step.to(self.energy.dtype) * self.params.update_interval
             rho = (self.target - self.displacement()).norm(dim=-1)
@@ -552,6 +556,7 @@ class SwimmerEnv(EnvBase):
             self.arrived[mask] = False
             self.arrival_step[mask] = -1
             self.energy[mask] = 0
+            self.shape_change[mask] = 0
             self.last_action[mask] = math.nan
         return self._observe()
 
@@ -612,7 +617,8 @@ class SwimmerEnv(EnvBase):
 
     def _cost(self, shape: torch.Tensor, moving: torch.Tensor) -> torch.Tensor | None:
         """Account the decision just taken by the ``moving`` swimmers with shape factor
-        ``shape`` (``(F, S)``): ``E_hat += K(Lambda) T_u / T``; returns the reward's cost
+        ``shape`` (``(F, S)``): ``E_hat += K(Lambda) T_u / T``,
+        ``C_hat += |Lambda - Lambda_prev| T_u / T`` (0 at the first decision); returns the reward's cost
         ``w K(Lambda) v_s T_u + w_c |Lambda - Lambda_prev| v_s T_u`` (None when both weights
         are 0)."""
         drag = drag_factor(shape)
@@ -620,6 +626,7 @@ class SwimmerEnv(EnvBase):
         self.energy += torch.where(moving, drag, zero) / self.params.n_decisions
         w, w_c = self.params.reward.energy_weight, self.params.reward.shape_change_weight
         change = (shape - self.last_action).abs().nan_to_num(nan=0.0)
+        self.shape_change += torch.where(moving, change, zero) / self.params.n_decisions
         self.last_action = torch.where(moving, shape, self.last_action)
         if w == 0 and w_c == 0:
             return None

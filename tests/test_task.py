@@ -149,6 +149,10 @@ def test_shape_change_cost():
     assert torch.allclose(rewards[0], torch.zeros_like(rewards[0]), atol=1e-6)  # first
     assert torch.allclose(rewards[1], torch.full_like(rewards[1], -0.5 * 0.6 * v), atol=1e-6)
     assert torch.allclose(rewards[2], torch.zeros_like(rewards[2]), atol=1e-6)
+    # C_hat = (1/N) sum_i |Lambda_i - Lambda_{i-1}|: |-0.4 - 0.2| once over N = 3 decisions
+    n = env.params.n_decisions
+    assert n == 3
+    assert torch.allclose(env.outcomes()["shape_change"], torch.full((1, 2), 0.6 / n), atol=1e-6)
 
 
 @pytest.mark.parametrize("over, key", [
@@ -157,6 +161,7 @@ def test_shape_change_cost():
     (["task=target", "task.arrival_radius=0"], "task.arrival_radius"),
     (["task.name=ring"], "task.name"),
     (["reward.energy_weight=-0.1"], "reward.energy_weight"),
+    (["reward.shape_change_weight=-1"], "reward.shape_change_weight"),
 ])
 def test_bad_task_values_are_one_line(compose_cfg, over, key):
     with pytest.raises(ConfigError) as err:
@@ -175,6 +180,9 @@ def test_target_comparison_metrics(compose_cfg):
     for row in record["rows"]:
         assert 0 <= row["arrival_mean"] <= 1 and len(row["arrival_per_flow"]) == 2
         assert 0 < row["energy_mean"] < 1.84
+        # C_hat: none for a constant shape; at most 2 Lambda_max per decision otherwise
+        assert (row["shape_change_mean"] == 0) == row["label"].startswith("naive")
+        assert 0 <= row["shape_change_mean"] <= 2 * 0.98
         if row["n_arrived"]:
             assert 0 < row["arrival_time_median"] <= 6.0
         # the arrival-time CDF over all swimmers (Kaplan-Meier, censored at T = 6)

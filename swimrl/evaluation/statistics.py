@@ -55,7 +55,7 @@ def chunk_outcomes(outcomes: dict, block: slice, update_interval: float) -> dict
     median is exact) and the swimmers per flow of the block (``swimmers_per_flow``, the
     denominator of the arrival-time distribution, :func:`outcome_statistics`)."""
     out = {}
-    for key in ("energy", "arrived", "final_distance"):
+    for key in ("energy", "shape_change", "arrived", "final_distance"):
         if key in outcomes:
             out[key] = outcomes[key][:, block].double().mean(dim=1).cpu().tolist()
     if "arrival_time" in outcomes:
@@ -74,7 +74,8 @@ def outcome_statistics(chunks: Sequence[dict], update_interval: float,
                        n_decisions: int | None = None) -> dict:
     r"""A strategy's outcomes over all flows from its :func:`chunk_outcomes` of every chunk.
 
-    ``energy_mean/std/sem`` (``E_hat``), and for ``task=target`` ``arrival_mean/std/sem``
+    ``energy_mean/std/sem`` (``E_hat``), ``shape_change_mean/std/sem`` (``C_hat``, where the
+    chunks have it: records written before it do not), and for ``task=target`` ``arrival_mean/std/sem``
     (the arrival probability within ``T``) and ``final_distance_mean/std/sem`` (units
     ``ell_f``), each with its ``*_per_flow`` values (mean, std, SEM over flows), and:
 
@@ -108,7 +109,8 @@ def outcome_statistics(chunks: Sequence[dict], update_interval: float,
     if not chunks or any(not c for c in chunks):
         return {}
     out: dict = {}
-    for key, name in (("energy", "energy"), ("arrived", "arrival"),
+    for key, name in (("energy", "energy"), ("shape_change", "shape_change"),
+                      ("arrived", "arrival"),
                       ("final_distance", "final_distance")):
         if key in chunks[0]:
             per_flow = [x for c in chunks for x in c[key]]

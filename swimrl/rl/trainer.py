@@ -218,8 +218,9 @@ class PPOTrainer:
         step = self.counters["frames"]
         self.logger.log_scalar("eval/R_hat", m["R_hat_mean"], step)
         self.logger.log_scalar("eval/R_hat_sem", m["R_hat_sem"], step)
-        for tag, key in (("eval/energy", "energy_mean"), ("eval/arrival", "arrival_mean")):
-            if key in m:  # E_hat always; the arrival probability with task=target
+        for tag, key in (("eval/energy", "energy_mean"), ("eval/shape_change", "shape_change_mean"),
+                         ("eval/arrival", "arrival_mean")):
+            if key in m:  # E_hat, C_hat always; the arrival probability with task=target
                 self.logger.log_scalar(tag, m[key], step)
         self.logger.log_scalar("eval/time_s", time.perf_counter() - t0, step)
         self.logger.log_scalar("eval/R_hat_vs_episodes", m["R_hat_mean"], round(self.episodes))

@@ -28,6 +28,7 @@ CURVE_TAGS = (
     "eval/R_hat",
     "eval/R_hat_sem",
     "eval/energy",
+    "eval/shape_change",
     "eval/arrival",
     "train/R_hat",
     "train/episodes",

@@ -131,6 +131,10 @@ def comparison_markdown(record: dict) -> str:
         head.append("E_hat (mean +- SEM)")
         for row, r in zip(rows, record["rows"], strict=True):
             row.append(f"{r['energy_mean']:.4f} +- {r['energy_sem']:.4f}")
+    if all("shape_change_mean" in r for r in record["rows"]):
+        head.append("C_hat (mean +- SEM)")
+        for row, r in zip(rows, record["rows"], strict=True):
+            row.append(f"{r['shape_change_mean']:.4f} +- {r['shape_change_sem']:.4f}")
     if all("arrival_mean" in r for r in record["rows"]):
         head += ["arrived (mean +- SEM)", f"arrived - {first} (paired)",
                  "arrival time mean / median of the arrived (tau_K)", "final distance (ell_f)"]
