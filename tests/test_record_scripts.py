@@ -16,3 +16,25 @@ def test_energy_100flows_summary_is_reproduced_from_its_record():
     out = subprocess.run([sys.executable, str(folder / "summarise.py")], capture_output=True,
                          text=True, check=True, cwd=ROOT).stdout
     assert json.loads(out) == json.loads((folder / "summary.json").read_text())
+
+
+def test_signal_search_script_finds_the_signals_of_a_synthetic_policy(tmp_path):
+    """referee_items/signal_search.py on a trajectories.npz whose Lambda depends on
+    (n_theta, S_np) only: that pair ranks first, and the JSON groups records by Ku."""
+    import numpy as np
+
+    rng = np.random.default_rng(0)
+    sig = rng.uniform(-1, 1, (4, 1, 20, 50, 5))  # (F, K, n, N, 5)
+    lam = -0.98 * np.tanh(5 * sig[..., 1] * sig[..., 3])
+    for s in (0, 1):
+        np.savez(tmp_path / f"r{s}.npz", signals=sig, Lambda=lam,
+                 signal_names=np.asarray(["n_r", "n_theta", "S_nn", "S_np", "omega"]))
+    script = ROOT / "docs" / "results" / "referee_items" / "signal_search.py"
+    out = tmp_path / "out.json"
+    subprocess.run([sys.executable, str(script), str(out), f"ku10_seed0={tmp_path / 'r0.npz'}",
+                    f"ku10_seed1={tmp_path / 'r1.npz'}"], check=True, cwd=ROOT)
+    rec = json.loads(out.read_text())
+    ku = rec["by_ku"]["ku10"]
+    assert ku["n_seeds"] == 2 and ku["ranked"]["2"][0] == "n_theta,S_np"
+    assert ku["R2_mean"]["n_theta,S_np"] > 0.8 and abs(ku["R2_mean"]["n_r"]) < 0.05
+    assert rec["records"]["ku10_seed0"]["n_decisions"] == 4 * 20 * 50
