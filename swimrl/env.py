@@ -618,9 +618,9 @@ class SwimmerEnv(EnvBase):
     def _cost(self, shape: torch.Tensor, moving: torch.Tensor) -> torch.Tensor | None:
         """Account the decision just taken by the ``moving`` swimmers with shape factor
         ``shape`` (``(F, S)``): ``E_hat += K(Lambda) T_u / T``,
-        ``C_hat += |Lambda - Lambda_prev| T_u / T`` (0 at the first decision); returns the reward's cost
-        ``w K(Lambda) v_s T_u + w_c |Lambda - Lambda_prev| v_s T_u`` (None when both weights
-        are 0)."""
+        ``C_hat += |Lambda - Lambda_prev| T_u / T`` (0 at the first decision); returns the
+        reward's cost ``w K(Lambda) v_s T_u + w_c |Lambda - Lambda_prev| v_s T_u`` (None when
+        both weights are 0)."""
         drag = drag_factor(shape)
         zero = torch.zeros_like(drag)
         self.energy += torch.where(moving, drag, zero) / self.params.n_decisions

@@ -75,9 +75,10 @@ def outcome_statistics(chunks: Sequence[dict], update_interval: float,
     r"""A strategy's outcomes over all flows from its :func:`chunk_outcomes` of every chunk.
 
     ``energy_mean/std/sem`` (``E_hat``), ``shape_change_mean/std/sem`` (``C_hat``, where the
-    chunks have it: records written before it do not), and for ``task=target`` ``arrival_mean/std/sem``
-    (the arrival probability within ``T``) and ``final_distance_mean/std/sem`` (units
-    ``ell_f``), each with its ``*_per_flow`` values (mean, std, SEM over flows), and:
+    chunks have it: records written before it do not), and for ``task=target``
+    ``arrival_mean/std/sem`` (the arrival probability within ``T``) and
+    ``final_distance_mean/std/sem`` (units ``ell_f``), each with its ``*_per_flow`` values
+    (mean, std, SEM over flows), and:
 
     * ``arrival_time_mean``, ``arrival_time_median``, ``n_arrived``: the mean and median
       arrival time of the arrived swimmers only (units ``tau_K``, pooled over all flows;
