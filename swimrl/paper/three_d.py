@@ -123,7 +123,8 @@ def build_three_d_paths(records: dict[str, Path], path: Path, n_paths: int = 3) 
         raise ValueError("threeDPaths: the trajectory records do not start from the same "
                          "positions (evaluate every strategy with the same seed and sizes)")
     plt = pyplot()
-    fig, axes = plt.subplots(2, len(data), figsize=(4.2 * len(data), 7.0), squeeze=False)
+    fig, axes = plt.subplots(2, len(data), figsize=(4.2 * len(data), 7.0), squeeze=False,
+                             layout="constrained")
     lam_max = float(next(iter(data.values()))["shape_factor_max"])
     norm = plt.Normalize(-lam_max, lam_max)
     out, line = {}, None
@@ -191,7 +192,8 @@ def build_three_d_maps(record: Path, path: Path) -> dict:
         pairs = pairs[:1]
     x = sig.reshape(-1, sig.shape[-1])
     plt = pyplot()
-    fig, axes = plt.subplots(1, len(pairs), figsize=(4.6 * len(pairs), 3.8), squeeze=False)
+    fig, axes = plt.subplots(1, len(pairs), figsize=(4.6 * len(pairs), 3.8), squeeze=False,
+                             layout="constrained")
     lam_max = float(d["shape_factor_max"])
     im = None
     for ax, (a, b) in zip(axes[0], pairs, strict=True):
