@@ -50,7 +50,7 @@ from swimrl.flows.build import FlowSpec, build_flow
 from swimrl.flows.pointwise import PointFlow, channels_2d
 from swimrl.physics.energy import drag_factor
 from swimrl.physics.integrator import select_kernel
-from swimrl.physics.signals import SIGNAL_NAMES, compute_signals, signal_indices
+from swimrl.physics.signals import SHAPE_SIGNAL, SIGNAL_NAMES, compute_signals, signal_indices
 from swimrl.physics.signals3d import SIGNAL_NAMES_3D, compute_signals_3d
 from swimrl.physics.swimmer import heun_step
 from swimrl.physics.swimmer3d import channels_from_gradient, heun_step_3d
@@ -135,7 +135,8 @@ class EnvParams:
                  lambda v: 0 < v <= self.duration, f"in (0, episode.duration={self.duration}]")
         as_float("swimmer.shape_factor_max", self.shape_factor_max, lambda v: 0 < v < 1,
                  "in (0, 1)")
-        signal_indices(self.signals, tuple(dict.fromkeys(SIGNAL_NAMES + SIGNAL_NAMES_3D)))
+        signal_indices(self.signals,
+                       tuple(dict.fromkeys(SIGNAL_NAMES + SIGNAL_NAMES_3D + (SHAPE_SIGNAL,))))
         object.__setattr__(
             self,
             "n_substeps",
@@ -233,7 +234,7 @@ class SwimmerEnv(EnvBase):
         #: The signals of the ``signals`` key (all of this dimension), in order.
         self.signal_names = SIGNAL_NAMES_3D if self.dim == 3 else SIGNAL_NAMES
         try:
-            self._obs_idx = signal_indices(params.signals, self.signal_names)
+            self._obs_idx = signal_indices(params.signals, self.signal_names + (SHAPE_SIGNAL,))
         except ConfigError as err:
             raise ConfigError(f"{err} (the flow is {self.dim}D)") from None
         self._kernel = self._select_kernel(kernel, flow.device)
@@ -457,8 +458,12 @@ class SwimmerEnv(EnvBase):
         sig = self.signals(disp)
         ended = (self.flow_step >= self.params.n_decisions).unsqueeze(1)
         truncated = ended.expand(self.batch_size).unsqueeze(-1)
+        observable = sig
+        if SHAPE_SIGNAL in self.params.signals:  # the shape held: last_action, 0 at the start
+            shape = self.last_action.nan_to_num(nan=0.0).unsqueeze(-1)
+            observable = torch.cat((sig, shape), -1)
         out = {
-            "observation": sig[..., self._obs_idx],
+            "observation": observable[..., self._obs_idx],
             "signals": sig,
             "distance": disp.norm(dim=-1, keepdim=True),
             "done": truncated.clone(),

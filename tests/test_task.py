@@ -284,3 +284,27 @@ def setup_strategy():
     from swimrl.policies.baselines import StrategySpec
 
     return StrategySpec("sto")
+
+
+def test_the_shape_signal_is_the_shape_held():
+    """``signals.names`` with ``Lambda``: the observation's column is the shape factor held
+    over the last interval (clamped as applied), 0 before the first decision and after a
+    reset; the other columns are the flow signals."""
+    names = ("n_r", "n_theta", "S_nn", "S_np", "omega", "Lambda")
+    env = target_env(n_swimmers=2, distance=30.0, duration=0.3, signals=names)
+    check_env_specs(env)
+    td = env.reset()
+    assert td["observation"].shape[-1] == 6 and torch.all(td["observation"][..., 5] == 0)
+    for lam in (0.2, -1.5):
+        td = env.step(td.set("action", torch.full((2, 2, 1), lam)))["next"]
+        assert torch.allclose(td["observation"][..., 5], torch.full((2, 2), max(lam, -0.98)))
+        assert torch.equal(td["observation"][..., :5], td["signals"])
+    td = env.reset(TensorDict({"_reset": torch.ones(2, 2, 1, dtype=torch.bool)}, [2, 2]))
+    assert torch.all(td["observation"][..., 5] == 0)
+
+
+@pytest.mark.parametrize("names", [["Lambda", "Lambda"], ["shape"]])
+def test_bad_shape_signal_names_are_one_line(compose_cfg, names):
+    with pytest.raises(ConfigError) as err:
+        env_params(compose_cfg(SMALL + [f"signals.names=[{','.join(names)}]"]))
+    assert "signals.names" in str(err.value) and "\n" not in str(err.value)

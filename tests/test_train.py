@@ -14,8 +14,9 @@ import pytest
 import torch
 from tensorboard.backend.event_processing.event_accumulator import EventAccumulator
 
-from swimrl.config import train_config
+from swimrl.config import eval_config, train_config
 from swimrl.errors import ConfigError
+from swimrl.evaluation.rollout import actor_for, evaluate
 from swimrl.rl.builders import auto_reward_scale, make_env
 from swimrl.rl.plan import EVAL_SEED_OFFSET, make_plan
 from swimrl.rl.run import train as _train
@@ -742,3 +743,16 @@ def test_a_checkpoint_config_from_before_rollout_length_upgrades_to_the_same_bat
     plan = make_plan(tc)
     assert (tc.train.frames_per_batch, plan.rollout_steps) == (65536, 16)
     assert (plan.lr_actor, plan.lr_critic) == (5.4e-3, 1.8e-3)
+
+
+def test_a_policy_that_senses_its_shape_trains_and_evaluates(train_cfg, tmp_path, compose_cfg):
+    """``signals=all_shape`` (the five signals and the shape held) with the shape-change cost:
+    training writes a six-input policy, and ``swimrl-eval`` rebuilds its observation."""
+    out = tmp_path / "run"
+    train(train_cfg("signals=all_shape", "reward.shape_change_weight=1"), out)
+    assert load_file(out / "policy.pt")["signals"] == ["n_r", "n_theta", "S_nn", "S_np",
+                                                        "omega", "Lambda"]
+    c = eval_config(compose_cfg(SMALL + ["strategy=policy", f"policy={out}", "eval.n_flows=1",
+                                         "eval.n_swimmers=4", "signals=all_shape"]))
+    m = evaluate(c.setup, actor_for(c.strategy, c.policy, c.setup.params), "policy")
+    assert m["shape_change_mean"] >= 0 and math.isfinite(m["R_hat_mean"])

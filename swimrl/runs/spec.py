@@ -12,7 +12,7 @@ from swimrl.env import EnvParams
 from swimrl.errors import ConfigError, as_bool, as_int, keep_number_types, one_of, require
 from swimrl.flows.build import FlowSpec
 from swimrl.flows.registry import flow_dimension, flow_entry
-from swimrl.physics.signals import SIGNAL_NAMES, signal_indices
+from swimrl.physics.signals import SHAPE_SIGNAL, SIGNAL_NAMES, signal_indices
 from swimrl.physics.signals3d import SIGNAL_NAMES_3D
 from swimrl.runtime import Runtime
 
@@ -85,7 +85,7 @@ class RunSpec:
         object.__setattr__(self, "seed", as_int("seed", self.seed, low=0))
         names = SIGNAL_NAMES_3D if self.dimension == 3 else SIGNAL_NAMES
         try:
-            signal_indices(self.params.signals, names)
+            signal_indices(self.params.signals, names + (SHAPE_SIGNAL,))
         except ConfigError as err:
             raise ConfigError(f"{err} (flow={self.flow.name} is {self.dimension}D)") from None
         kernels = flow_entry(self.flow.name).kernels
