@@ -48,6 +48,7 @@ from swimrl.errors import ConfigError, IntegrityError, as_float, keep_number_typ
 from swimrl.flows.base import GriddedFlow
 from swimrl.flows.build import FlowSpec, build_flow
 from swimrl.flows.pointwise import PointFlow, channels_2d
+from swimrl.flows.registry import POINT_KERNELS
 from swimrl.physics.energy import drag_factor
 from swimrl.physics.integrator import select_kernel
 from swimrl.physics.signals import SHAPE_SIGNAL, SIGNAL_NAMES, compute_signals, signal_indices
@@ -721,7 +722,8 @@ class PointSwimmerEnv(SwimmerEnv):
     :func:`~swimrl.physics.swimmer3d.heun_step_3d`
     (``dn/dt = omega x n / 2 + Lambda (S n - (n.S n) n)``), the signals the seven of
     :mod:`swimrl.physics.signals3d` and a target's direction uniform on the sphere. Every
-    decision integrates ``T_u / dt`` Heun steps eagerly (``kernel=auto|eager``).
+    decision integrates ``T_u / dt`` Heun steps eagerly; ``kernel=compiled`` (``auto`` on a
+    GPU) evaluates the 3D stochastic flow by its compiled mode sum.
     """
 
     def __init__(self, flow: PointFlow, n_swimmers: int, params: EnvParams,
@@ -739,7 +741,12 @@ class PointSwimmerEnv(SwimmerEnv):
         return flow.u_rms if flow.u_rms is not None else flow.ell_f / flow.tau_k
 
     def _select_kernel(self, kernel: str, device: torch.device):
-        one_of("kernel", kernel, ("auto", "eager"))
+        """``compiled`` (and ``auto`` on a device other than the CPU): the flow's compiled
+        sampler where it has one (:meth:`~swimrl.flows.pointwise.PointFlow.compile_sampler`);
+        the Heun steps stay eager."""
+        one_of("kernel", kernel, POINT_KERNELS)
+        if kernel == "compiled" or (kernel == "auto" and device.type != "cpu"):
+            self.flow.compile_sampler()
         return None
 
     def state(self) -> tuple[torch.Tensor, ...]:

@@ -347,3 +347,45 @@ def test_point_flows_check_the_positions_shape():
         TaylorGreenFlow(1).sample(torch.zeros(1, 4, 3))
     with pytest.raises(ValueError, match=r"expected \(2, S, 3\)"):
         ABCFlow(2).sample(torch.zeros(1, 4, 3))
+
+
+@pytest.mark.parametrize("basis", ["redrawn", "fixed"])
+def test_compiled_sampler_agrees_with_the_eager_one(basis):
+    """``kernel=compiled``: the compiled mode sum gives the eager (u, A) to float32
+    round-off, for all flows and for a subset (``fullgraph=True``: a graph break fails)."""
+    gen = torch.Generator().manual_seed(3)
+    flow = StochasticFlow3D(3, 10.0, generator=gen, basis=basis)
+    pos = 5 * torch.randn(3, 7, 3, generator=gen)
+    u0, a0 = flow.sample(pos)
+    sub_pos, sub = pos[:2], torch.tensor([2, 0])
+    u1, a1 = flow.sample(sub_pos, sub)
+    flow.compile_sampler()
+    u, a = flow.sample(pos)
+    torch.testing.assert_close(u, u0, rtol=1e-5, atol=1e-5)
+    torch.testing.assert_close(a, a0, rtol=1e-5, atol=1e-5)
+    u, a = flow.sample(sub_pos, sub)
+    torch.testing.assert_close(u, u1, rtol=1e-5, atol=1e-5)
+    torch.testing.assert_close(a, a1, rtol=1e-5, atol=1e-5)
+
+
+def test_compiled_kernel_runs_the_3d_env_as_the_eager_one(compose_cfg):
+    """A 3D environment with ``kernel=compiled`` follows the eager one's swimmers to float32
+    round-off over a decision, and ``kernel`` refuses a 2D-grid kernel in one line."""
+    from swimrl.config import env_params
+    from swimrl.env import PointSwimmerEnv
+
+    params = env_params(compose_cfg(["flow=stochastic3d", "episode.duration=1.0"]))
+    envs = {}
+    for kernel in ("eager", "compiled"):
+        gen = torch.Generator().manual_seed(5)
+        envs[kernel] = PointSwimmerEnv(StochasticFlow3D(2, 10.0, generator=gen), 4, params,
+                                       generator=gen, kernel=kernel)
+    tds = {k: e.reset() for k, e in envs.items()}
+    action = torch.full((2, 4, 1), 0.5)
+    for k, e in envs.items():
+        tds[k] = e.step(tds[k].set("action", action))["next"]
+    torch.testing.assert_close(envs["compiled"].pos, envs["eager"].pos, rtol=1e-4, atol=1e-5)
+    torch.testing.assert_close(tds["compiled"]["signals"], tds["eager"]["signals"],
+                               rtol=1e-4, atol=1e-4)
+    with pytest.raises(ConfigError, match="kernel"):
+        PointSwimmerEnv(StochasticFlow3D(1, 10.0), 2, params, kernel="fused")

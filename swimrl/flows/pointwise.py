@@ -77,6 +77,10 @@ class PointFlow:
         all flows if None): ``u`` ``(F', S, d)``, ``A_ij = d_j u_i`` ``(F', S, d, d)``."""
         raise NotImplementedError
 
+    def compile_sampler(self) -> None:
+        """Use a compiled :meth:`sample` where the flow has one (``kernel=compiled``; the
+        analytic flows have none and stay eager)."""
+
     def advance(self, dt: float) -> None:
         """Move every flow from ``t`` to ``t + dt``."""
         self.time += dt

@@ -27,7 +27,7 @@ Builder = Callable[..., Any]
 #: (or renamed), from the ``flow`` node as plain containers.
 Given = Callable[[Mapping, Any, Any], dict]
 #: The kernels of a flow evaluated at points (:class:`~swimrl.env.PointSwimmerEnv`).
-POINT_KERNELS = ("auto", "eager")
+POINT_KERNELS = ("auto", "eager", "compiled")
 #: ``table_bytes(spec, n_flows, dtype, interval) -> bytes`` the realisations hold.
 TableBytes = Callable[..., int]
 

@@ -76,6 +76,7 @@ through the flow registry (:mod:`swimrl.flows.registry`).
 
 from __future__ import annotations
 
+import functools
 import math
 from dataclasses import dataclass
 
@@ -123,6 +124,25 @@ def gradient_covariance(ell: float = 1.0, u_rms: float = 1.0,
     return u_rms**2 / (6 * ell**2) * form
 
 
+def mode_sum(pos: torch.Tensor, k: torch.Tensor, table: torch.Tensor, c: torch.Tensor,
+             n_waves: int) -> torch.Tensor:
+    """``(u, A)`` flattened, ``(F', S, 12)``: ``[w cos(k.x), w sin(k.x)] @ table`` with the
+    per-mode weight ``w_n = c_{n // K}`` (``K = n_waves``), ``pos`` ``(F', S, 3)``, ``k``
+    ``(F' or 1, MK, 3)``, ``table`` ``(F' or 1, 2MK, 12)``, ``c`` ``(F', M)``."""
+    w = c.repeat_interleave(n_waves, dim=-1).repeat(1, 2).unsqueeze(-2)  # (F', 1, 2MK)
+    phase = pos @ k.transpose(-1, -2)                                    # (F', S, MK)
+    return (torch.cat((torch.cos(phase), torch.sin(phase)), -1) * w) @ table
+
+
+@functools.cache
+def compiled_mode_sum():
+    """:func:`mode_sum` compiled by ``torch.compile(fullgraph=True, dynamic=False)``: the
+    phases, their cosines and sines and the weights fused into the products (one
+    compilation per process and combination of shapes, ~10 s on the CPU). Agrees with
+    :func:`mode_sum` to float32 round-off (``tests/test_flows3d.py``)."""
+    return torch.compile(mode_sum, fullgraph=True, dynamic=False)
+
+
 class StochasticFlow3D(OUCoefficients, PointFlow):
     """``n_flows`` realisations of the 3D stochastic flow at Kubo number ``kubo``.
 
@@ -163,6 +183,9 @@ class StochasticFlow3D(OUCoefficients, PointFlow):
         super().__init__(n_flows, device, dtype)
         self.tau_f = self.kubo * self.ell_f / self.u_rms
         self.generator = generator
+        #: The mode sum of :meth:`sample`: :func:`mode_sum`, or compiled
+        #: (:meth:`compile_sampler`).
+        self._mode_sum = mode_sum
         n = self.n_basis * self.n_waves
         rows = 1 if self.basis_mode == "fixed" else self.n_flows
         shape = (rows, n, 3)
@@ -257,10 +280,12 @@ class StochasticFlow3D(OUCoefficients, PointFlow):
         table = self.table if rows_all else self.table[flows]
         if not everything:
             c = c[flows]
-        w = c.repeat_interleave(self.n_waves, dim=-1).repeat(1, 2).unsqueeze(-2)  # (F', 1, 2MK)
-        phase = pos @ k.transpose(-1, -2)                               # (F', S, MK)
-        out = (torch.cat((torch.cos(phase), torch.sin(phase)), -1) * w) @ table
+        out = self._mode_sum(pos, k, table, c, self.n_waves)
         return out[..., :3], out[..., 3:].unflatten(-1, (3, 3))
+
+    def compile_sampler(self) -> None:
+        """Evaluate :meth:`sample` by :func:`compiled_mode_sum` (``kernel=compiled``)."""
+        self._mode_sum = compiled_mode_sum()
 
     def velocity(self, pos: torch.Tensor, flows: torch.Tensor | None = None) -> torch.Tensor:
         """``u`` alone (no gradient products), ``(F', S, 3)``."""
