@@ -10,9 +10,10 @@ signal), for every subset of one to four of the five signals.
 Reads trajectories.npz records written by ``swimrl-eval ... strategy=policy eval.record=N``
 (every decision of N swimmers per flow: the five signals and the action Lambda) and writes
 one JSON: per record the R^2 of each subset, the number of decisions and the two flow groups
-(the first and the second half of the flows); per label prefix before ``_seed`` (the Ku) the
-mean and std over its records (the training seeds) and the subsets of each size ranked by
-that mean.
+(the first and the second half of the flows), and the fraction of decisions with
+sign(Lambda) = sign(Lambda_STO) = -sign(n_theta S_np) (where that is not 0); per label
+prefix before ``_seed`` (the Ku) the mean and std over its records (the training seeds) and
+the subsets of each size ranked by that mean.
 
 Usage:  python signal_search.py OUT.json LABEL=RUN_DIR_OR_NPZ [LABEL=...]
 """
@@ -44,8 +45,13 @@ def analyse(path: Path) -> dict:
     fold = np.broadcast_to((np.arange(n_flows) < n_flows // 2)[:, None, None], lam.shape)
     r2 = subset_search(lam.ravel(), sig.reshape(-1, sig.shape[-1]), names, fold.ravel(),
                        sizes=SIZES, bins=BINS)
+    # STO's sign (eq:sto): sign(Lambda_STO) = -sign(n_theta S_np), where that is not 0
+    sto = -np.sign(sig[..., names.index("n_theta")] * sig[..., names.index("S_np")])
+    has = sto != 0
+    agree = float((np.sign(lam[has]) == sto[has]).mean())
     return {"R2": r2, "n_decisions": int(lam.size), "n_flows": int(n_flows),
-            "swimmers_per_flow": int(lam.shape[1]), "var_Lambda": float(lam.var())}
+            "swimmers_per_flow": int(lam.shape[1]), "var_Lambda": float(lam.var()),
+            "sign_agreement_STO": agree}
 
 
 def summarise(records: dict[str, dict]) -> dict:
@@ -61,7 +67,10 @@ def summarise(records: dict[str, dict]) -> dict:
         std = {k: float(v.std(ddof=1)) if v.size > 1 else 0.0 for k, v in vals.items()}
         ranked = {str(size): sorted((k for k in keys if k.count(",") == size - 1),
                                     key=lambda k: -mean[k]) for size in SIZES}
+        agree = np.array([r["sign_agreement_STO"] for r in recs])
         out[ku] = {"n_seeds": len(recs), "R2_mean": mean, "R2_std": std, "ranked": ranked,
+                   "sign_agreement_STO_mean": float(agree.mean()),
+                   "sign_agreement_STO_std": float(agree.std(ddof=1)) if agree.size > 1 else 0.0,
                    "best_per_seed": {str(size): [max((k for k in keys
                                                       if k.count(",") == size - 1),
                                                      key=lambda k, r=r: r["R2"][k])
