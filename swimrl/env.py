@@ -99,8 +99,10 @@ class EnvParams:
     shape_factor_max
         ``Lambda_max`` in ``(0, 1)`` (``swimmer.shape_factor_max``; the paper: 0.98).
     signals
-        The signals the policy observes, a subset of
-        :data:`~swimrl.physics.signals.SIGNAL_NAMES` in that order (``signals.names``).
+        The signals the policy observes (``signals.names``): names of
+        :data:`~swimrl.physics.signals.SIGNAL_NAMES` (2D) or
+        :data:`~swimrl.physics.signals3d.SIGNAL_NAMES_3D` (3D), and optionally
+        :data:`~swimrl.physics.signals.SHAPE_SIGNAL` (the shape held).
     task
         The task (``task.*``): displacement (the paper's) or target.
     reward

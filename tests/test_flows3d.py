@@ -17,7 +17,9 @@ from swimrl.flows.pointwise import channels_2d, vorticity
 from swimrl.flows.stochastic3d import (
     TAU_K,
     StochasticFlow3D,
+    compiled_mode_sum,
     gradient_covariance,
+    mode_sum,
     velocity_covariance,
 )
 
@@ -387,5 +389,9 @@ def test_compiled_kernel_runs_the_3d_env_as_the_eager_one(compose_cfg):
     torch.testing.assert_close(envs["compiled"].pos, envs["eager"].pos, rtol=1e-4, atol=1e-5)
     torch.testing.assert_close(tds["compiled"]["signals"], tds["eager"]["signals"],
                                rtol=1e-4, atol=1e-4)
+    assert envs["compiled"].flow._mode_sum is compiled_mode_sum()
+    assert envs["eager"].flow._mode_sum is mode_sum
+    auto = PointSwimmerEnv(StochasticFlow3D(1, 10.0), 2, params, kernel="auto")
+    assert auto.flow._mode_sum is mode_sum  # auto on the CPU: eager
     with pytest.raises(ConfigError, match="kernel"):
         PointSwimmerEnv(StochasticFlow3D(1, 10.0), 2, params, kernel="fused")

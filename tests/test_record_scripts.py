@@ -38,3 +38,5 @@ def test_signal_search_script_finds_the_signals_of_a_synthetic_policy(tmp_path):
     assert ku["n_seeds"] == 2 and ku["ranked"]["2"][0] == "n_theta,S_np"
     assert ku["R2_mean"]["n_theta,S_np"] > 0.8 and abs(ku["R2_mean"]["n_r"]) < 0.05
     assert rec["records"]["ku10_seed0"]["n_decisions"] == 4 * 20 * 50
+    # Lambda = -0.98 tanh(5 n_theta S_np): STO's sign wherever n_theta S_np != 0
+    assert rec["records"]["ku10_seed0"]["sign_agreement_STO"] == 1.0

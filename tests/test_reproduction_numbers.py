@@ -767,14 +767,14 @@ def _box_ratio(name: str) -> str:
 BOXES = ("default_100x200", "L20_100x200", "L100_coarse_100x200")
 
 
-
 # -- row 20: the signal-subset search --------------------------------------------------------
 def _search(ku: str) -> dict:
     return rec("referee_items/signal_search.json")["by_ku"][ku]
 
 
 def _search_sizes() -> str:
-    recs = rec("referee_items/signal_search.json")["records"].values()
+    recs = [r for label, r in rec("referee_items/signal_search.json")["records"].items()
+            if label.startswith("ku")]  # the protocol's runs (ku<KU>_seed<S>)
     sizes = {(r["n_flows"], r["swimmers_per_flow"]) for r in recs}
     assert len(sizes) == 1 and len(recs) == 12
     (f, n), = sizes
@@ -785,6 +785,7 @@ def _search_best() -> str:
     ok = all(b == "n_theta,S_np,omega" for k in KUS for b in _search(k)["best_per_seed"]["3"])
     return ("The best triple is `(n_θ, S_np, ω)` for every seed at every Ku" if ok
             else "not the same best triple for every seed")
+
 
 ROWS: dict[int, Spec] = {
     1: Spec("figure only"),

@@ -308,3 +308,18 @@ def test_bad_shape_signal_names_are_one_line(compose_cfg, names):
     with pytest.raises(ConfigError) as err:
         env_params(compose_cfg(SMALL + [f"signals.names=[{','.join(names)}]"]))
     assert "signals.names" in str(err.value) and "\n" not in str(err.value)
+
+
+def test_an_arrived_swimmer_adds_no_shape_change():
+    """C_hat counts the decisions of moving swimmers only: after arriving, a swimmer's
+    shape changes add nothing (as its energy)."""
+    env = target_env(n_swimmers=2, distance=30.0, duration=0.3)
+    td = env.reset()
+    td = env.step(td.set("action", torch.full((2, 2, 1), 0.2)))["next"]
+    env.arrived[0, 1] = True
+    td = env.step(td.set("action", torch.full((2, 2, 1), -0.4)))["next"]
+    c = env.outcomes()["shape_change"]
+    n = env.params.n_decisions
+    assert float(c[0, 1]) == 0.0
+    assert torch.allclose(c[:, 0], torch.full((2,), 0.6 / n))
+    assert float(c[1, 1]) == pytest.approx(0.6 / n)

@@ -69,7 +69,11 @@ def explained_fraction(lam: np.ndarray, signals: np.ndarray, subset: Sequence[in
         with np.errstate(invalid="ignore", divide="ignore"):
             mean = np.where(counts > 0, sums / counts, lam[fit].mean())
         resid = lam[test] - mean[cells[test]]
-        scores.append(1.0 - np.mean(resid ** 2) / np.var(lam[test]))
+        var = np.var(lam[test])
+        if var == 0:
+            raise ValueError("explained_fraction: Lambda is constant in a fold (no variance "
+                             "to explain)")
+        scores.append(1.0 - np.mean(resid ** 2) / var)
     return float(np.mean(scores))
 
 

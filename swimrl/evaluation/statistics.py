@@ -50,10 +50,11 @@ def mean_flow_stats(stats: list[dict], how: str) -> dict:
 def chunk_outcomes(outcomes: dict, block: slice, update_interval: float) -> dict:
     """One flow chunk's per-flow outcomes of the swimmers ``block`` (a strategy's block of
     the environment) from :meth:`~swimrl.env.SwimmerEnv.outcomes`: the per-flow means of
-    ``energy`` and, for ``task=target``, of ``arrived`` and ``final_distance``, every
-    arrived swimmer's arrival decision (``arrival_steps``, one list per flow: the pooled
-    median is exact) and the swimmers per flow of the block (``swimmers_per_flow``, the
-    denominator of the arrival-time distribution, :func:`outcome_statistics`)."""
+    ``energy``, ``shape_change`` and, for ``task=target``, of ``arrived`` and
+    ``final_distance``, every arrived swimmer's arrival decision (``arrival_steps``, one
+    list per flow: the pooled median is exact) and the swimmers per flow of the block
+    (``swimmers_per_flow``, the denominator of the arrival-time distribution,
+    :func:`outcome_statistics`)."""
     out = {}
     for key in ("energy", "shape_change", "arrived", "final_distance"):
         if key in outcomes:

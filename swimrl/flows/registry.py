@@ -53,7 +53,7 @@ class FlowEntry:
         Memory the realisations hold (:data:`TableBytes`; None: negligible, 0).
     kernels
         The ``kernel`` values the flow runs with (None: all; a point flow: ``auto``,
-        ``eager``).
+        ``eager``, ``compiled``).
     """
 
     name: str

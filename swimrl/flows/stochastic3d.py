@@ -139,7 +139,10 @@ def compiled_mode_sum():
     """:func:`mode_sum` compiled by ``torch.compile(fullgraph=True, dynamic=False)``: the
     phases, their cosines and sines and the weights fused into the products (one
     compilation per process and combination of shapes, ~10 s on the CPU). Agrees with
-    :func:`mode_sum` to float32 round-off (``tests/test_flows3d.py``)."""
+    :func:`mode_sum` to float32 round-off (``tests/test_flows3d.py``). Each new shape
+    (batch, a fixed basis's ``(1, MK, 3)``), dtype or grad mode compiles again; past
+    dynamo's recompile limit (8) a call runs eagerly with a warning: a run uses a few shapes
+    (training and evaluation batches)."""
     return torch.compile(mode_sum, fullgraph=True, dynamic=False)
 
 

@@ -19,11 +19,12 @@ from swimrl.errors import ConfigError
 from swimrl.physics.swimmer import strain_nn, strain_np
 
 SIGNAL_NAMES: tuple[str, ...] = ("n_r", "n_theta", "S_nn", "S_np", "omega")
+"""All signal names, in the order of the ``signals`` key of the environment."""
+
 #: Not a flow signal: the swimmer's own shape factor, the ``Lambda`` it held over the last
 #: decision interval (0 before its first decision), observable with ``signals.names`` in 2D
 #: and 3D (the state of ``reward.shape_change_weight``'s cost, which depends on it).
 SHAPE_SIGNAL = "Lambda"
-"""All signal names, in the order of the ``signals`` key of the environment."""
 
 
 def compute_signals(
