@@ -766,6 +766,33 @@ def _box_ratio(name: str) -> str:
 
 BOXES = ("default_100x200", "L20_100x200", "L100_coarse_100x200")
 
+# -- row 18: (n_theta, S_np) at Ku = 0.1 ------------------------------------------------------
+def _nth_rows(name: str) -> list[dict]:
+    rows = rec(f"referee_items/nth_snp_ku0.1/{name}/comparison.json")["rows"]
+    return [r for r in rows if r["label"].startswith("policy(")]
+
+
+def _nth_same_flows() -> str:
+    a, b = (cmp_rows(f"referee_items/nth_snp_ku0.1/{n}/comparison.json")["sto"]["per_flow"]
+            for n in ("compare_nth_snp", "compare_all"))
+    return ("the two records' STO rows are identical flow by flow" if a == b
+            else "the two records' STO rows differ")
+
+
+def _nth_over_full() -> str:
+    """The three two-signal seeds' per-flow mean over the full-state seeds', paired per flow
+    (ratio of means, delta-method SEM)."""
+    x, y = (np.mean([r["per_flow"] for r in _nth_rows(n)], axis=0)
+            for n in ("compare_nth_snp", "compare_all"))
+    return pm(*paired(x, y))
+
+
+def _sign_agreement(prefix: str) -> str:
+    recs = rec("referee_items/signal_search.json")["records"]
+    return nums([100 * recs[f"{prefix}_seed{k}"]["sign_agreement_STO"] for k in range(3)], 1,
+                " / ") + " %"
+
+
 
 # -- row 20: the signal-subset search --------------------------------------------------------
 def _search(ku: str) -> dict:
@@ -840,7 +867,20 @@ ROWS: dict[int, Spec] = {
                       C("82.9 / 81.1 / 80.2 %",
                         lambda: nums([100 * v for v in _per_seed("ku0.1", "sign_agreement_STO")],
                                      1, " / ") + " %"))),
-    18: Spec("none"),
+    18: Spec("json", (
+        C("R̂ = 0.993 / 0.993 / 0.993 × STO", lambda: "R̂ = " + nums(
+            [r["ratio_to_first"] for r in _nth_rows("compare_nth_snp")], 3, " / ") + " × STO"),
+        C("against 0.993 / 0.997 / 0.997 for the full state", lambda: "against " + nums(
+            [r["ratio_to_first"] for r in _nth_rows("compare_all")], 3, " / ")
+          + " for the full state"),
+        C("(seeds 0 / 1 / 2, paired, ± ≤ 0.001)", lambda: "(seeds 0 / 1 / 2, paired, ± ≤ "
+          + num(max(r["ratio_sem"] for k in ("compare_nth_snp", "compare_all")
+                    for r in _nth_rows(k)), 3) + ")"),
+        C("0.998 ± 0.001", _nth_over_full),
+        C("the two records' STO rows are identical flow by flow", _nth_same_flows),
+        C("83.9 / 81.5 / 84.5 %", lambda: _sign_agreement("nth_snp_ku0.1")),
+        C("82.9 / 81.2 / 80.3 %", lambda: _sign_agreement("ku0.1"))),
+        unrecorded={"8 flows × 100 swimmers": SETUP}),
     19: Spec("json", (
         C("τ_f = 0.2 τ_K; 20 flows × 20 recorded swimmers per run, every decision "
           "(T_u = 0.1 τ_K)", _orient_setup),
