@@ -30,12 +30,15 @@ def quantile_cells(x: np.ndarray, bins: int) -> np.ndarray:
     return np.searchsorted(edges, x, side="left")
 
 
-def cell_index(signals: np.ndarray, subset: Sequence[int], bins: int) -> np.ndarray:
+def cell_index(signals: np.ndarray, subset: Sequence[int], bins: int,
+               columns: Sequence[np.ndarray] | None = None) -> np.ndarray:
     """Flat cell index ``sum_k c_k bins^k`` of each decision in the signals ``subset``
-    (columns of ``signals``, ``(n, d)``), ``c_k`` from :func:`quantile_cells`."""
+    (columns of ``signals``, ``(n, d)``), ``c_k`` from :func:`quantile_cells` (or taken from
+    ``columns``, every column's :func:`quantile_cells` computed once)."""
     idx = np.zeros(len(signals), dtype=np.int64)
     for col in subset:
-        idx = idx * bins + quantile_cells(signals[:, col], bins)
+        c = columns[col] if columns is not None else quantile_cells(signals[:, col], bins)
+        idx = idx * bins + c
     return idx
 
 
@@ -55,12 +58,16 @@ def explained_fraction(lam: np.ndarray, signals: np.ndarray, subset: Sequence[in
     bins
         Quantile intervals per signal.
     """
-    lam = np.asarray(lam, dtype=np.float64)
+    signals = np.asarray(signals, dtype=np.float64)
+    cells = cell_index(signals, subset, bins)
+    return _cross_fitted(np.asarray(lam, dtype=np.float64), cells, bins ** len(subset), fold)
+
+
+def _cross_fitted(lam: np.ndarray, cells: np.ndarray, n_cells: int, fold) -> float:
+    """:func:`explained_fraction` from each decision's cell index ``cells``."""
     fold = np.asarray(fold, dtype=bool)
     if fold.all() or not fold.any():
         raise ValueError("explained_fraction needs decisions in both folds")
-    cells = cell_index(np.asarray(signals, dtype=np.float64), subset, bins)
-    n_cells = bins ** len(subset)
     scores = []
     for fit in (fold, ~fold):
         test = ~fit
@@ -82,6 +89,12 @@ def subset_search(lam: np.ndarray, signals: np.ndarray, names: Sequence[str],
                   bins: int = 10) -> dict[str, float]:
     """:func:`explained_fraction` of every subset of ``sizes`` signals, keyed by the names
     joined with ``,`` (``"n_r,S_np,omega"``), subsets in the order of ``names``."""
-    return {",".join(names[i] for i in sub):
-            explained_fraction(lam, signals, sub, fold, bins)
-            for k in sizes for sub in combinations(range(len(names)), k)}
+    lam = np.asarray(lam, dtype=np.float64)
+    signals = np.asarray(signals, dtype=np.float64)
+    columns = [quantile_cells(signals[:, j], bins) for j in range(len(names))]  # once each
+    out = {}
+    for k in sizes:
+        for sub in combinations(range(len(names)), k):
+            cells = cell_index(signals, sub, bins, columns)
+            out[",".join(names[i] for i in sub)] = _cross_fitted(lam, cells, bins ** k, fold)
+    return out
