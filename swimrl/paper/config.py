@@ -31,6 +31,7 @@ def figures_config(cfg: DictConfig) -> FiguresConfig:
         params=env_params(cfg), results=path(cfg.results), curves=path(cfg.curves),
         fits=path(cfg.fits), ablation=path(cfg.ablation), records=path(cfg.records),
         beyond=path(cfg.beyond), three_d=path(cfg.three_d),
+        three_seeds=path(cfg.three_seeds),
         dns=None if cfg.dns is None else dns_figures_config(cfg.dns, path),
     )
 

@@ -73,7 +73,8 @@ from swimrl.runtime import Runtime
 #: The figures, in build order (the keys of :data:`swimrl.paper.build.BUILDERS`).
 FIGURES = ("swimmer", "smartPerformance", "ku0.1", "kuInf", "ku_pattern", "trainingCurves",
            "ablation", "robustness-noise", "robustness", "dnsFlow", "videos", "beyondTarget",
-           "beyondTargetPaths", "beyondEnergy", "threeDKu", "threeDPaths", "threeDMaps")
+           "beyondTargetPaths", "beyondEnergy", "threeDKu", "threeDPaths", "threeDMaps",
+           "seedSpread")
 #: The figures that keep a record ``<records>/<figure>.json`` (:func:`figure_record`).
 RECORDED = ("smartPerformance", "ku0.1", "kuInf", "ku_pattern", "ablation", "robustness-noise",
             "robustness")
@@ -212,6 +213,9 @@ class FiguresConfig:
     three_d: Path
     """The 3D study's records (``compare/ku<KU>/``, ``paths/ku10_<strategy>/``;
     :mod:`.three_d`)."""
+    three_seeds: Path
+    """Records of the protocol's three seeds per Ku (``robustness/``, ``ablation_b/``,
+    ``minimal_fits/``, ``dns_transfer/``; Fig. seedSpread, :mod:`.seeds`)."""
     progress: bool
 
     def __post_init__(self) -> None:
