@@ -23,12 +23,14 @@ def test_signal_search_script_finds_the_signals_of_a_synthetic_policy(tmp_path):
     (n_theta, S_np) only: that pair ranks first, and the JSON groups records by Ku."""
     import numpy as np
 
+    from swimrl.evaluation.trajectories import save_trajectories
+
     rng = np.random.default_rng(0)
     sig = rng.uniform(-1, 1, (4, 1, 20, 50, 5))  # (F, K, n, N, 5)
     lam = -0.98 * np.tanh(5 * sig[..., 1] * sig[..., 3])
     for s in (0, 1):
-        np.savez(tmp_path / f"r{s}.npz", signals=sig, Lambda=lam,
-                 signal_names=np.asarray(["n_r", "n_theta", "S_nn", "S_np", "omega"]))
+        save_trajectories({"signals": sig, "Lambda": lam}, tmp_path / f"r{s}.npz", ["policy"],
+                          {"seed": s})
     script = ROOT / "docs" / "results" / "referee_items" / "signal_search.py"
     out = tmp_path / "out.json"
     subprocess.run([sys.executable, str(script), str(out), f"ku10_seed0={tmp_path / 'r0.npz'}",

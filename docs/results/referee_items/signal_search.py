@@ -27,6 +27,7 @@ from pathlib import Path
 import numpy as np
 
 from swimrl.analysis.signal_relevance import subset_search
+from swimrl.evaluation.trajectories import load_trajectories
 
 SIZES = (1, 2, 3, 4)
 BINS = 10
@@ -34,9 +35,8 @@ BINS = 10
 
 def analyse(path: Path) -> dict:
     """R^2 of every subset of SIZES signals from one trajectories.npz."""
-    z = np.load(path)
-    names = [str(n) for n in z["signal_names"]] if "signal_names" in z else [
-        "n_r", "n_theta", "S_nn", "S_np", "omega"]
+    z = load_trajectories(path)
+    names = z["signal_names"]
     sig = np.asarray(z["signals"][:, 0], dtype=np.float64)  # (F, n, N, d): strategy block 0
     lam = np.asarray(z["Lambda"][:, 0], dtype=np.float64)  # (F, n, N)
     n_flows = sig.shape[0]
@@ -54,6 +54,11 @@ def analyse(path: Path) -> dict:
             "sign_agreement_STO": agree}
 
 
+def of_size(keys: list[str], size: int) -> list[str]:
+    """The subsets (``"a,b,c"``) of ``size`` signals among ``keys``."""
+    return [k for k in keys if k.count(",") == size - 1]
+
+
 def summarise(records: dict[str, dict]) -> dict:
     """Per Ku (the label before ``_seed``): mean and std of R^2 over seeds, ranked."""
     groups: dict[str, list[dict]] = {}
@@ -65,14 +70,13 @@ def summarise(records: dict[str, dict]) -> dict:
         vals = {k: np.array([r["R2"][k] for r in recs]) for k in keys}
         mean = {k: float(v.mean()) for k, v in vals.items()}
         std = {k: float(v.std(ddof=1)) if v.size > 1 else 0.0 for k, v in vals.items()}
-        ranked = {str(size): sorted((k for k in keys if k.count(",") == size - 1),
-                                    key=lambda k: -mean[k]) for size in SIZES}
+        ranked = {str(size): sorted(of_size(keys, size), key=lambda k: -mean[k])
+                  for size in SIZES}
         agree = np.array([r["sign_agreement_STO"] for r in recs])
         out[ku] = {"n_seeds": len(recs), "R2_mean": mean, "R2_std": std, "ranked": ranked,
                    "sign_agreement_STO_mean": float(agree.mean()),
                    "sign_agreement_STO_std": float(agree.std(ddof=1)) if agree.size > 1 else 0.0,
-                   "best_per_seed": {str(size): [max((k for k in keys
-                                                      if k.count(",") == size - 1),
+                   "best_per_seed": {str(size): [max(of_size(keys, size),
                                                      key=lambda k, r=r: r["R2"][k])
                                                  for r in recs] for size in SIZES}}
     return out
