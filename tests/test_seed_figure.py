@@ -63,7 +63,7 @@ def test_committed_records_are_read_as_the_readme_tables_quote_them():
     assert round(fits[2]["c1"]["value"][2], 3) == 2.984
     abl = seeds.ablation_ratios(ROOT)
     assert round(abl["ku10"][0]["smart/STO"][0], 3) == 1.292
-    assert sum(len(v) for v in abl.values()) == 10
+    assert sum(len(v) for v in abl.values()) == 12
 
 
 def test_swimrl_figures_draws_it(tmp_path):
