@@ -42,3 +42,20 @@ def test_signal_search_script_finds_the_signals_of_a_synthetic_policy(tmp_path):
     assert rec["records"]["ku10_seed0"]["n_decisions"] == 4 * 20 * 50
     # Lambda = -0.98 tanh(5 n_theta S_np): STO's sign wherever n_theta S_np != 0
     assert rec["records"]["ku10_seed0"]["sign_agreement_STO"] == 1.0
+
+
+def test_optimal_escape_script_runs_at_a_tiny_size(tmp_path):
+    """referee_items/optimal_escape.py (reproduction row 4) at a tiny size: one record per Ku,
+    the best orientation at least the mean over orientations, fractions in [0, 1]."""
+    script = ROOT / "docs" / "results" / "referee_items" / "optimal_escape.py"
+    out = tmp_path / "oe.json"
+    subprocess.run([sys.executable, str(script), str(out), "--kubo", "10", "--flows", "2",
+                    "--starts", "2", "--orientations", "8", "--duration", "1"], check=True,
+                   cwd=tmp_path)
+    rec = json.loads(out.read_text())["by_ku"]["ku10"]
+    for lam in ("-0.98", "+0.98"):
+        assert rec["best"][lam]["1"]["mean"] >= rec["mean"][lam]["1"]["mean"] > 0
+        assert 0 <= rec["vortex_fraction"][lam]["mean"] <= 1
+        assert 0 <= rec["confined_fraction"][lam] <= 1
+    assert 0 < rec["vortex_fraction_eulerian"] < 1
+    assert (tmp_path / "oe.png").stat().st_size > 0

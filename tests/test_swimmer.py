@@ -117,6 +117,24 @@ def test_rhs_matches_the_tensor_form():
     assert torch.allclose(rate, expected, atol=1e-12)
 
 
+def test_lambda_minus_one_turns_as_zermelo_heading():
+    """Sec. III A / App. D: with Lambda = -1 Jeffery's rate is Zermelo's minimum-time heading
+    equation, dtheta/dt = sin^2(theta) v_x + sin(theta) cos(theta) (u_x - v_y)
+    - cos^2(theta) u_y, for any incompressible velocity gradient; with Lambda = +1 it is not."""
+    g = torch.Generator().manual_seed(1)
+    grad = torch.randn(200, 2, 2, generator=g)                # grad[p, i, j] = d u_i / d x_j
+    grad[:, 1, 1] = -grad[:, 0, 0]                            # div u = 0
+    ux, uy, vx, vy = grad[:, 0, 0], grad[:, 0, 1], grad[:, 1, 0], grad[:, 1, 1]
+    q = torch.stack((torch.zeros_like(ux), torch.zeros_like(ux), ux, (uy + vx) / 2, vx - uy), -1)
+    theta = torch.rand(200, generator=g) * 2 * math.pi
+    s, c = theta.sin(), theta.cos()
+    zermelo = s * s * vx + s * c * (ux - vy) - c * c * uy
+    _, rate = swimmer_rhs(q, theta, torch.tensor(-1.0), 0.7)
+    assert torch.allclose(rate, zermelo, atol=1e-12)
+    _, prolate = swimmer_rhs(q, theta, torch.tensor(1.0), 0.7)
+    assert (prolate - zermelo).abs().max() > 0.5
+
+
 def test_bilinear_interpolation_is_exact_for_bilinear_and_second_order():
     n, length = 32, 2 * math.pi
     h = length / n
