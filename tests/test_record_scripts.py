@@ -59,3 +59,16 @@ def test_optimal_escape_script_runs_at_a_tiny_size(tmp_path):
         assert 0 <= rec["confined_fraction"][lam] <= 1
     assert 0 < rec["vortex_fraction_eulerian"] < 1
     assert (tmp_path / "oe.png").stat().st_size > 0
+
+
+def test_dns_transfer_summary_is_what_the_records_give():
+    """three_seeds/dns_transfer/summarise.py on the committed records reproduces the committed
+    summary.json and table.md (the numbers quoted in three_seeds/README.md)."""
+    folder = ROOT / "docs" / "results" / "three_seeds" / "dns_transfer"
+    script = str(folder / "summarise.py")
+    out = subprocess.run([sys.executable, script], capture_output=True, text=True, check=True,
+                         cwd=ROOT).stdout
+    assert json.loads(out) == json.loads((folder / "summary.json").read_text())
+    md = subprocess.run([sys.executable, script, "--md"], capture_output=True, text=True,
+                        check=True, cwd=ROOT).stdout
+    assert md == (folder / "table.md").read_text()

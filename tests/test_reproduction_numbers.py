@@ -1035,6 +1035,11 @@ ROWS: dict[int, Spec] = {
               *_dns_ratio(policy("pretrained/ku10")))),
         C("0.983, 1.133, 1.204", lambda: nums(
             [_dns_ratio(policy(f"pretrained/{k}"))[0] for k in ("ku0.1", "ku1", "ku1e7")])),
+        C("seed means 0.953 / 1.113 / 1.199 / 1.183", lambda: "seed means " + " / ".join(
+            f"{_dns_seeds()['by_ku'][k]['policy']['mean']:.3f}"
+            for k in ("ku0.1", "ku1", "ku10", "ku1e7"))),
+        C("1.011 ± 0.004, 1.021 ± 0.008, 1.009 ± 0.005", lambda: ", ".join(
+            pm(v["ratio"], v["sem"]) for v in _dns_seeds()["ku10_over_ku1e7"].values())),
         C("10^7 below 10 on every realisation", lambda: "10^7 below 10 on every realisation"
           if all(a < b for a, b in zip(_dns_ratio(policy("pretrained/ku1e7"))[2],
                                        _dns_ratio(policy("pretrained/ku10"))[2], strict=True))
@@ -1240,6 +1245,12 @@ def test_every_verdict_row_has_an_entry_and_every_entry_a_row():
     assert sorted(rows) == list(range(1, max(rows) + 1)), "rows are numbered 1..N once"
     assert set(rows) - set(ROWS) == set(), "rows of the page without an entry here"
     assert set(ROWS) - set(rows) == set(), "entries here without a row on the page"
+
+
+def _dns_seeds() -> dict:
+    """The three-seed DNS transfer summary (``three_seeds/dns_transfer/summary.json``)."""
+    return json.loads((DOCS / "results" / "three_seeds" / "dns_transfer" / "summary.json")
+                      .read_text())
 
 
 def _counts(rows) -> tuple[int, ...]:
