@@ -831,8 +831,21 @@ ROWS: dict[int, Spec] = {
              rec(f"{RI}/naive_scan/{k}/comparison.json")["n_swimmers"]) for k in KUS))),
         C("9 constant Λ from −0.98 to 0.98", lambda: "{} constant Λ from {} to {}".format(*_one(
             (len(_scan(k)), _lam(min(_scan(k))), _lam(max(_scan(k)))) for k in KUS))))),
-    4: Spec("none", unrecorded={"Λ = −0.98": SETUP,
-                                "Λ = 0.98": "row 3's result (checked there)"}),
+    4: Spec("json", (
+        C("by 0.046 ± 0.006 (Ku = 10^7) and 0.065 ± 0.014 (Ku = 10)", lambda: (
+            f"by {_oe_diff('ku1e7', '5')} (Ku = 10^7) and {_oe_diff('ku10', '5')} (Ku = 10)")),
+        C("by 0.874 ± 0.034 at 100 τ_K", lambda: "by " + _oe_diff("ku1e7", "100").lstrip("−-")
+          + " at 100 τ_K"),
+        C("0.462 of the", lambda: f"{num(_oe('ku1e7')['confined_fraction']['-0.98'])} of the"),
+        C("against 0.003 for", lambda: "against "
+          + num(_oe("ku1e7")["confined_fraction"]["+0.98"]) + " for"),
+        C("0.135 against 0.033", lambda: " against ".join(
+            num(_oe("ku10")["confined_fraction"][k]) for k in ("-0.98", "+0.98"))),
+        C("0.306 against 0.426", lambda: f"{num(_oe('ku1e7')['vortex_fraction']['-0.98']['mean'])}"
+          f" against {num(_oe('ku1e7')['vortex_fraction_eulerian'])}"),
+        C("0.476 against 0.365", lambda: " against ".join(
+            num(_oe("ku10")["vortex_fraction"][k]["mean"]) for k in ("-0.98", "+0.98"))),
+    ), unrecorded={"Λ = −0.98": SETUP, "Λ = 0.98": SETUP, "R̂ < 0.1": SETUP}),
     5: Spec("test"),
     6: Spec("json", (C("0.945 ± 0.001, 0.633 ± 0.002, 0.528 ± 0.002, 0.477 ± 0.011",
                        _sto_means),)),
@@ -1245,6 +1258,18 @@ def test_every_verdict_row_has_an_entry_and_every_entry_a_row():
     assert sorted(rows) == list(range(1, max(rows) + 1)), "rows are numbered 1..N once"
     assert set(rows) - set(ROWS) == set(), "rows of the page without an entry here"
     assert set(ROWS) - set(rows) == set(), "entries here without a row on the page"
+
+
+def _oe(ku: str) -> dict:
+    """One Ku of ``referee_items/optimal_escape/optimal_escape.json`` (row 4)."""
+    path = DOCS / "results" / "referee_items" / "optimal_escape" / "optimal_escape.json"
+    return json.loads(path.read_text())["by_ku"][ku]
+
+
+def _oe_diff(ku: str, t: str) -> str:
+    """Best-orientation R_hat of Lambda = -0.98 minus Lambda = 0.98's at ``t``, paired."""
+    d = _oe(ku)["best_minus_prolate"]["-0.98"][t]
+    return pm(d["mean"], d["sem"])
 
 
 def _dns_seeds() -> dict:
