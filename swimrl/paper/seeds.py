@@ -41,8 +41,9 @@ COEFFICIENTS = ("c1", "c2", "c3", "c4")
 MARKERS = {0: "o", 1: "s", 2: "^"}
 #: Panels (a)-(d), (h): one shade of the smart colour per seed.
 SEED_COLORS = {0: "#fdae61", 1: "#e6550d", 2: "#7f2704"}
-#: A policy row of a DNS transfer comparison: ``policy(<...>/ku<KU>_seed<S>)``.
-_SEED_ROW = re.compile(r"policy\(.*/(ku[^/]+)_seed(\d+)/?(?:policy\.pt)?\)")
+#: A row of one training seed in a DNS transfer comparison: ``policy(<...>/ku<KU>_seed<S>)``
+#: or ``minimal(ku<KU>_seed<S>)`` (groups: kind, Ku name, seed).
+SEEDED_ROW = re.compile(r"(policy|minimal)\((?:.*/)?(ku[^/_)]+)_seed(\d+)/?\)")
 
 
 def _read(path: Path) -> dict | None:
@@ -95,41 +96,49 @@ def fit_coefficients(root: Path) -> dict[int, dict[str, dict]]:
     return out
 
 
+def pooled_rows(root: Path) -> tuple[list[str], dict[str, list[np.ndarray]]]:
+    """The realisations (``dns_transfer/seed<s>/``) and every row's per-flow ``R_hat`` in each
+    of them, in realisation order; a row absent from some realisation or with another number of
+    flows than STO's there is refused (ValueError)."""
+    records = sorted((root / "dns_transfer").glob("seed*/comparison.json"))
+    names = [p.parent.name for p in records]
+    rows: dict[str, list[np.ndarray]] = {}
+    for path in records:
+        table = {r["label"]: np.asarray(r["per_flow"]) for r in
+                 json.loads(path.read_text())["rows"]}
+        for label, values in table.items():
+            if values.size != table["sto"].size:
+                raise ValueError(f"{path}: row {label} has {values.size} flows, "
+                                 f"sto {table['sto'].size}")
+            rows.setdefault(label, []).append(values)
+    for label, per in rows.items():
+        if len(per) != len(records):
+            raise ValueError(f"row {label} is missing from some of {names}")
+    return names, rows
+
+
 def dns_transfer_ratios(root: Path) -> dict:
     r"""Smart / STO in the DNS per training Ku and seed, pooled over the realisations: the
     per-flow ``R_hat`` of every ``dns_transfer/seed<s>/comparison.json`` (each flow a start
-    window of one realisation), paired with STO's on the same flows
+    window of one realisation; :func:`pooled_rows`), paired with STO's on the same flows
     (:func:`~swimrl.evaluation.statistics.paired_ratio`). ``{"realisations": [...],
     "n_flows": n, ku name: {seed: (value, sem)}}``; empty without records."""
-    records = sorted((root / "dns_transfer").glob("seed*/comparison.json"))
-    per_flow: dict[tuple[str, int], list[float]] = {}
-    sto: list[float] = []
-    for path in records:
-        rows = {r["label"]: r for r in json.loads(path.read_text())["rows"]}
-        sto.extend(rows["sto"]["per_flow"])
-        n = len(rows["sto"]["per_flow"])
-        for label, row in rows.items():
-            m = _SEED_ROW.fullmatch(label)
-            if m and parse_ku_name(m.group(1)) is not None:
-                if len(row["per_flow"]) != n:
-                    raise ValueError(f"{path}: row {label} has {len(row['per_flow'])} flows, "
-                                     f"sto {n}")
-                per_flow.setdefault((m.group(1), int(m.group(2))), []).extend(row["per_flow"])
-    if not records:
+    names, rows = pooled_rows(root)
+    if not names:
         return {}
-    out: dict = {"realisations": [p.parent.name for p in records], "n_flows": len(sto)}
-    for (name, seed), values in per_flow.items():
-        if len(values) != len(sto):
-            raise ValueError(f"policy {name} seed {seed} is missing from some of "
-                             f"{out['realisations']}")
-        out.setdefault(name, {})[seed] = paired_ratio(np.asarray(values), np.asarray(sto))
+    sto = np.concatenate(rows["sto"])
+    out: dict = {"realisations": names, "n_flows": int(sto.size)}
+    for label, per in rows.items():
+        m = SEEDED_ROW.fullmatch(label)
+        if m and m.group(1) == "policy" and parse_ku_name(m.group(2)) is not None:
+            out.setdefault(m.group(2), {})[int(m.group(3))] = paired_ratio(
+                np.concatenate(per), sto)
     return out
 
 
-def _offset(seed: int, x: np.ndarray, log: bool) -> np.ndarray:
-    """``x`` shifted a little per seed so that the error bars do not overlap."""
-    d = (seed - 1) * 0.025
-    return x * 10 ** d if log else x + d * 4
+def _offset(seed: int, x: np.ndarray) -> np.ndarray:
+    """``x`` on a log axis shifted a little per seed so that the error bars do not overlap."""
+    return x * 10 ** ((seed - 1) * 0.025)
 
 
 def _ku_text(kubo: float, prefix: str = "Ku = ") -> str:
@@ -161,7 +170,7 @@ def build_seed_spread(root: Path, path: Path) -> dict:
         for seed, d in sweeps[key].items():
             x = np.asarray(d["x"], dtype=float)
             log = bool((x > 0).all())
-            ax.errorbar(_offset(seed, x, log) if log else x, d["ratio"], yerr=d["sem"],
+            ax.errorbar(_offset(seed, x) if log else x, d["ratio"], yerr=d["sem"],
                         color=SEED_COLORS[seed], marker=MARKERS[seed], capsize=2, lw=1,
                         label=f"seed {seed}")
             if log:
@@ -202,7 +211,7 @@ def build_seed_spread(root: Path, path: Path) -> dict:
             continue
         for c, color in zip(pair, ("tab:blue", "tab:red"), strict=True):
             for seed, d in fits.items():
-                ax.errorbar(_offset(seed, np.asarray(d["ku"]), True), d[c]["value"],
+                ax.errorbar(_offset(seed, np.asarray(d["ku"])), d[c]["value"],
                             yerr=d[c]["sem"], color=color, marker=MARKERS[seed], capsize=2,
                             lw=1, label=f"{c}, seed {seed}")
         ax.set_xscale("log")

@@ -13,29 +13,22 @@ Usage:  python summarise.py > summary.json      (python summarise.py --md: the t
 from __future__ import annotations
 
 import json
-import re
 from pathlib import Path
 
 import numpy as np
 
 from swimrl.evaluation.statistics import paired_ratio
+from swimrl.paper.seeds import SEEDED_ROW, pooled_rows
 
 HERE = Path(__file__).resolve().parent
-_SEEDED = re.compile(r"(policy|minimal)\((?:.*/)?(ku[^/_)]+)_seed(\d+)/?\)")
 
 
 def main() -> dict:
-    records = sorted(HERE.glob("seed*/comparison.json"))
-    rows: dict[str, list[np.ndarray]] = {}
-    for path in records:
-        for r in json.loads(path.read_text())["rows"]:
-            rows.setdefault(r["label"], []).append(np.asarray(r["per_flow"]))
+    names, rows = pooled_rows(HERE.parent)
     sto = rows["sto"]
-    out: dict = {"realisations": [p.parent.name for p in records],
+    out: dict = {"realisations": names,
                  "n_flows": int(sum(v.size for v in sto)), "rows": {}, "by_ku": {}}
     for label, per in rows.items():
-        if len(per) != len(sto):
-            raise SystemExit(f"{label}: in {len(per)} of {len(sto)} realisations")
         a, b = np.concatenate(per), np.concatenate(sto)
         ratio, sem = paired_ratio(a, b)
         each = [float(x.mean() / y.mean()) for x, y in zip(per, sto, strict=True)]
@@ -45,7 +38,7 @@ def main() -> dict:
                               if len(each) > 1 else 0.0}
     by: dict[tuple[str, str], dict[int, float]] = {}
     for label, r in out["rows"].items():
-        m = _SEEDED.fullmatch(label)
+        m = SEEDED_ROW.fullmatch(label)
         if m:
             by.setdefault((m.group(1), m.group(2)), {})[int(m.group(3))] = r["ratio"]
     for (kind, ku), seeds in sorted(by.items()):
@@ -82,7 +75,7 @@ def markdown(out: dict) -> str:
     lines += ["", "| row | R̂ | R̂ / R̂_STO (paired) | per realisation | std over realisations |",
               "|---|---|---|---|---|"]
     for label, r in out["rows"].items():
-        if not _SEEDED.fullmatch(label):
+        if not SEEDED_ROW.fullmatch(label):
             lines.append(f"| {label} | {r['R_hat']:.3f} | {r['ratio']:.3f} ± {r['ratio_sem']:.3f}"
                          f" | {', '.join(f'{x:.3f}' for x in r['per_realisation'])}"
                          f" | {r['std_over_realisations']:.3f} |")
