@@ -1,4 +1,5 @@
-"""Tables of the three-seed records (reads logs/three_seeds/*; prints markdown)."""
+"""Tables of the three-seed records beside this script (minimal_fits/, robustness/, ablation_b/);
+prints the markdown tables of README.md: ``python summarise.py [fits] [robustness] [ablation]``."""
 # ruff: noqa: E501, E702
 import json
 import sys
@@ -6,7 +7,7 @@ from pathlib import Path
 
 import numpy as np
 
-R = Path("/work/frozen/logs/three_seeds")
+R = Path(__file__).resolve().parent
 KUS = ["0.1", "1", "10", "1e7"]
 SHIPPED = {"0.1": 1, "1": 0, "10": 2, "1e7": 2}
 C = ("c1", "c2", "c3", "c4")
@@ -18,7 +19,7 @@ def fits():
     agg = {}
     for k in KUS:
         for s in (0, 1, 2):
-            p = R / f"minimal_fits/seed{s}/ku{k}/fit.json"
+            p = R / f"minimal_fits/ku{k}_seed{s}/fit.json"
             if not p.exists():
                 print(f"| {k} | {s} | (missing) |||||"); continue
             f = json.loads(p.read_text())
@@ -74,7 +75,7 @@ def robustness():
 
 def ablation():
     print("\n### ablation (b) (20 flows x 500 per strategy; paired ± SEM)\n")
-    print("| Ku | seed | smart R̂ | minimal R̂ | STO R̂ | smart/STO | minimal/STO | minimal/smart |")
+    print("| Ku | seed | smart R̂ | minimal R̂ | STO R̂ | smart / STO | minimal / STO | minimal / smart |")
     print("|---|---|---|---|---|---|---|---|")
     for k in KUS:
         for s in (0, 1, 2):
