@@ -96,3 +96,29 @@ def test_swimrl_figures_names_draw_from_the_study_dir(records, tmp_path):
     assert "correlations" in three_d.build_three_d_maps_figure(cfg)
     assert {p.name for p in (tmp_path / "fig").iterdir()} == {
         "threeDKu.png", "threeDPaths.png", "threeDMaps.png"}
+
+
+def _curves(run, rows, finished):
+    run.mkdir(parents=True)
+    lines = ["frames,eval/R_hat,eval/R_hat_sem,train/R_hat"]
+    lines += [f"{f},{r},0.01," for f, r in rows] + ["5000,,,0.9"]  # no held-out evaluation
+    (run / "curves.csv").write_text("\n".join(lines) + "\n")
+    if finished:
+        (run / "policy.pt").write_bytes(b"")
+
+
+def test_three_d_curves_per_ku_and_seed(tmp_path):
+    runs, compare = tmp_path / "runs", tmp_path / "compare"
+    assert "pending" in three_d.build_three_d_curves(runs, compare, tmp_path / "c.png")
+    _curves(runs / "ku10_seed0", [(0, 0.2), (2000, 0.5), (4000, 0.55)], finished=True)
+    _curves(runs / "ku10_seed2", [(0, 0.25), (2000, 0.52)], finished=False)
+    _curves(runs / "ku1_seed1", [(0, 0.3)], finished=False)
+    (runs / "ku10_notes").mkdir()  # not a run directory: ignored
+    _comparison(compare, "ku10", [("sto", 0.4), ("naive(+0.98)", 0.2), ("policy(a)", 0.5)])
+    out = three_d.build_three_d_curves(runs, compare, tmp_path / "c.png")
+    assert (tmp_path / "c.png").is_file()
+    assert set(out) == {"path", "ku1", "ku10"} and set(out["ku10"]) == {"seed0", "seed2"}
+    # only the rows where the held-out evaluation was logged, in frame order
+    assert out["ku10"]["seed0"] == {"frames": [0.0, 2000.0, 4000.0], "R_hat": [0.2, 0.5, 0.55],
+                                    "finished": True}
+    assert out["ku10"]["seed2"]["finished"] is False and out["ku1"]["seed1"]["R_hat"] == [0.3]

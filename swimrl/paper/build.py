@@ -13,7 +13,12 @@ from .records import FiguresConfig
 from .robustness import build_robustness, build_robustness_noise
 from .seeds import build_seed_spread_figure
 from .stochastic import build_smart_performance, build_swimmer
-from .three_d import build_three_d_ku_figure, build_three_d_maps_figure, build_three_d_paths_figure
+from .three_d import (
+    build_three_d_curves_figure,
+    build_three_d_ku_figure,
+    build_three_d_maps_figure,
+    build_three_d_paths_figure,
+)
 from .training import build_training_curves
 from .videos import build_videos
 
@@ -36,6 +41,7 @@ BUILDERS: dict[str, Callable[[FiguresConfig], dict]] = {
     "threeDKu": build_three_d_ku_figure,
     "threeDPaths": build_three_d_paths_figure,
     "threeDMaps": build_three_d_maps_figure,
+    "threeDCurves": build_three_d_curves_figure,
     "seedSpread": build_seed_spread_figure,
 }
 

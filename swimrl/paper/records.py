@@ -74,7 +74,7 @@ from swimrl.runtime import Runtime
 FIGURES = ("swimmer", "smartPerformance", "ku0.1", "kuInf", "ku_pattern", "trainingCurves",
            "ablation", "robustness-noise", "robustness", "dnsFlow", "videos", "beyondTarget",
            "beyondTargetPaths", "beyondEnergy", "threeDKu", "threeDPaths", "threeDMaps",
-           "seedSpread")
+           "threeDCurves", "seedSpread")
 #: The figures that keep a record ``<records>/<figure>.json`` (:func:`figure_record`).
 RECORDED = ("smartPerformance", "ku0.1", "kuInf", "ku_pattern", "ablation", "robustness-noise",
             "robustness")

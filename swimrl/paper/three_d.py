@@ -9,7 +9,11 @@ r"""Figures of the 3D study (``docs/results.md``, "Three dimensions"), drawn fro
   x-z planes, each segment coloured by the shape factor ``Lambda`` held over it;
 * **threeDMaps**: the smart policy's ``<Lambda>`` binned over pairs of its signals, from the
   decisions of a trajectory record: the pair of the two signals most correlated with
-  ``Lambda`` (``|corr|``, recorded with all seven) and ``(S_np1, n_r)``, the pair STO reads.
+  ``Lambda`` (``|corr|``, recorded with all seven) and ``(S_np1, n_r)``, the pair STO reads;
+* **threeDCurves**: the held-out ``R_hat`` of every 3D training run (``runs/ku*_seed*/
+  curves.csv``, ± SEM) against frames, one panel per Ku, with 3D STO and naive of the
+  comparison at that Ku (where it exists) as horizontal lines; a run not yet finished is
+  drawn as far as its committed checkpoint and labelled so.
 """
 
 from __future__ import annotations
@@ -20,9 +24,11 @@ from pathlib import Path
 import numpy as np
 
 from swimrl.analysis.plots import pyplot
+from swimrl.analysis.training_curves import draw_curve
 from swimrl.flows.labels import ku_name, parse_ku_name
 from swimrl.physics.signals3d import SIGNAL_NAMES_3D
 from swimrl.policies.baselines import StrategyLabel
+from swimrl.runs.curves import read_curves
 
 from .records import FiguresConfig
 from .style import COLORS, save
@@ -209,6 +215,54 @@ def build_three_d_maps(record: Path, path: Path) -> dict:
             "decisions": int(lam.size)}
 
 
+def read_runs(root: Path) -> dict[float, dict[int, Path]]:
+    """``{Ku: {seed: run dir}}`` of the run directories ``root/ku<KU>_seed<S>`` holding a
+    ``curves.csv``."""
+    out: dict[float, dict[int, Path]] = {}
+    for path in sorted(Path(root).glob("ku*_seed*/curves.csv")):
+        ku_part, _, seed = path.parent.name.rpartition("_seed")
+        ku = parse_ku_name(ku_part)
+        if ku is not None and seed.isdigit():
+            out.setdefault(ku, {})[int(seed)] = path.parent
+    return {ku: dict(sorted(runs.items())) for ku, runs in sorted(out.items())}
+
+
+def build_three_d_curves(runs: Path, compare: Path, path: Path) -> dict:
+    """Fig. threeDCurves (module docstring) into ``path``; returns per Ku and seed the frames
+    and held-out ``R_hat`` drawn and whether the run is finished (its ``policy.pt`` there),
+    or ``{"pending": ...}`` without runs."""
+    found = read_runs(runs)
+    if not found:
+        return {"pending": f"no {Path(runs) / 'ku*_seed*/curves.csv'}"}
+    comparisons = read_comparisons(compare)
+    plt = pyplot()
+    fig, axes = plt.subplots(1, len(found), figsize=(4.6 * len(found), 3.8), sharey=True,
+                             squeeze=False)
+    out: dict[str, dict] = {}
+    for ax, (ku, seeds) in zip(axes[0], found.items(), strict=True):
+        out[ku_name(ku)] = {}
+        for seed, run in seeds.items():
+            finished = (run / "policy.pt").is_file()
+            curve = read_curves(run)
+            x, y = draw_curve(ax, curve, "eval/R_hat", frames_per_unit=1e6, ms=2,
+                              label=f"seed {seed}" + ("" if finished else
+                                                      f" (at {curve['frames'][-1]:.2g} frames)"))
+            out[ku_name(ku)][f"seed{seed}"] = {"frames": x.tolist(), "R_hat": y.tolist(),
+                                               "finished": finished}
+        summary = ku_summary(comparisons[ku]) if ku in comparisons else {}
+        for name in ("STO", "naive"):
+            if name in summary:
+                ax.axhline(summary[name]["R_hat"], color=COLORS[name], ls="--", lw=1,
+                           label=f"3D {name} (comparison)")
+        ax.set_title(f"3D, Ku = {ku:g}", fontsize=9)
+        ax.set_xlabel("training frames (millions of decisions)")
+        ax.grid(alpha=0.3)
+        ax.legend(fontsize=7)
+    axes[0][0].set_ylabel(r"held-out $\hat R$ (16 flows x 32 swimmers, ± SEM)")
+    fig.tight_layout()
+    save(fig, path)
+    return {"path": str(path), **out}
+
 
 # -- swimrl-figures (cfg.three_d: the study's records) -------------------------------------
 #: The trajectory records of threeDPaths and threeDMaps, under ``<three_d>/paths/``.
@@ -240,3 +294,9 @@ def build_three_d_maps_figure(cfg: FiguresConfig) -> dict:
     if not record.is_file():
         return {"pending": f"no {record}"}
     return build_three_d_maps(record, Path(cfg.out) / "threeDMaps.png")
+
+
+def build_three_d_curves_figure(cfg: FiguresConfig) -> dict:
+    """Fig. threeDCurves from ``<three_d>/runs`` and ``<three_d>/compare``."""
+    return build_three_d_curves(Path(cfg.three_d) / "runs", Path(cfg.three_d) / "compare",
+                                Path(cfg.out) / "threeDCurves.png")
