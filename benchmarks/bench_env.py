@@ -10,7 +10,14 @@ of ``--intervals`` consecutive
 * env steps (``env.step``: the interval + signals, reward, done flags, TorchRL's
   bookkeeping: what the collector calls once per decision): ms per env step;
 
-and the seconds of the first (warm-up) interval, where ``compiled`` compiles.
+and the seconds of the first (warm-up) interval, where ``compiled`` compiles, and the share of
+the timed intervals' CPU time spent in the kernel (``sys %``: page faults, mostly).
+``--malloc retain`` (default, as every ``swimrl-*`` command on the CPU) keeps freed buffers in
+the heap (:func:`swimrl.runtime.retain_freed_memory`); ``--malloc default`` leaves glibc's
+defaults, which map and unmap the 3D flow's large temporaries every call:
+
+    python benchmarks/bench_env.py --flow stochastic3d --threads 1 --batches 10x1000 \
+        --kernels compiled --malloc default
 
     python benchmarks/bench_env.py --device cpu --threads 2
     python benchmarks/bench_env.py --threads 1 --batches 64x64 --kernels fused compiled
@@ -29,6 +36,7 @@ sum of :func:`swimrl.flows.stochastic3d.compiled_mode_sum`):
 from __future__ import annotations
 
 import argparse
+import resource
 import time
 
 import torch
@@ -37,6 +45,7 @@ from swimrl.env import EnvParams, SwimmerEnv
 from swimrl.flows.stochastic import StochasticFlow
 from swimrl.flows.stochastic3d import StochasticFlow3D
 from swimrl.physics.signals3d import SIGNAL_NAMES_3D
+from swimrl.runtime import retain_freed_memory
 
 DEFAULT_BATCHES = ["1x1000", "10x100", "10x1000", "100x100", "1x10000", "10x10000", "1x100000"]
 #: The GPU floor's batch (docs/training.md, issue 46): train_preset=parallel_gpu, 16 384 swimmers.
@@ -75,6 +84,7 @@ def measure(flows: int, swimmers: int, kernel: str, args) -> dict:
     env.step(td)
     k = env.params.n_substeps
     interval, step = float("inf"), float("inf")
+    cpu0 = resource.getrusage(resource.RUSAGE_SELF)
     for _ in range(args.repeats):
         _sync(args.device)
         t0 = time.perf_counter()
@@ -87,8 +97,11 @@ def measure(flows: int, swimmers: int, kernel: str, args) -> dict:
             env.step(td)
         _sync(args.device)
         step = min(step, (time.perf_counter() - t0) / args.intervals)
+    cpu1 = resource.getrusage(resource.RUSAGE_SELF)
+    user, system = cpu1.ru_utime - cpu0.ru_utime, cpu1.ru_stime - cpu0.ru_stime
     return {"substeps_per_s": flows * swimmers * k / interval, "ms_interval": 1e3 * interval,
-            "ms_step": 1e3 * step, "first_s": first, "n_substeps": k}
+            "ms_step": 1e3 * step, "first_s": first, "n_substeps": k,
+            "sys_percent": 100 * system / max(user + system, 1e-9)}
 
 
 def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
@@ -107,6 +120,9 @@ def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
                    help="fused runs on the CPU only (skipped elsewhere)")
     p.add_argument("--n-grid", type=int, default=None, help="flow grid points (default 400)")
     p.add_argument("--spacing", type=float, default=None, help="grid spacing (default 0.025)")
+    p.add_argument("--malloc", choices=("retain", "default"), default="retain",
+                   help="retain: freed buffers stay in the heap (as the swimrl commands); "
+                        "default: glibc's defaults")
     p.add_argument("--smoke", action="store_true",
                    help="tiny grid and batch, one interval (a test that the script runs)")
     args = p.parse_args(argv)
@@ -121,15 +137,17 @@ def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
 def main(argv: list[str] | None = None) -> list[dict]:
     args = parse_args(argv)
     torch.set_num_threads(args.threads)
+    retained = args.malloc == "retain" and retain_freed_memory()
     dev = torch.cuda.get_device_name() if args.device.startswith("cuda") else "cpu"
     k = EnvParams().n_substeps
     print(f"# device={args.device} ({dev}) threads={args.threads} torch={torch.__version__} "
           f"flow={args.flow} Ku={args.kubo:g} K={k} substeps per interval, "
           + (f"{args.n_waves} modes per component; " if args.flow == "stochastic3d" else
              f"grid {args.n_grid} x {args.spacing:g}; ") +
-          f"best of {args.repeats} x {args.intervals} intervals")
+          f"best of {args.repeats} x {args.intervals} intervals; malloc="
+          + ("retain" if retained else "default"))
     print(f"{'batch':>10} {'swimmers':>9} {'kernel':>8} {'substeps/s':>11} {'ms/interval':>12} "
-          f"{'ms/env step':>12} {'warm-up s':>10}")
+          f"{'ms/env step':>12} {'warm-up s':>10} {'sys %':>6}")
     rows = []
     for b in args.batches:
         flows, swimmers = (int(v) for v in b.split("x"))
@@ -141,7 +159,8 @@ def main(argv: list[str] | None = None) -> list[dict]:
             r = measure(flows, swimmers, kernel, args)
             rows.append({"batch": b, "kernel": kernel, **r})
             print(f"{b:>10} {flows * swimmers:>9} {kernel:>8} {r['substeps_per_s']:>11.3e} "
-                  f"{r['ms_interval']:>12.3f} {r['ms_step']:>12.3f} {r['first_s']:>10.2f}",
+                  f"{r['ms_interval']:>12.3f} {r['ms_step']:>12.3f} {r['first_s']:>10.2f} "
+                  f"{r['sys_percent']:>6.1f}",
                   flush=True)
     return rows
 

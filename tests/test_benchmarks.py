@@ -72,16 +72,20 @@ def test_bench_env_smoke(tmp_path):
                  "compiled", cwd=tmp_path)
     head, rows = table(out, "batch")
     assert "substeps/s" in head and "ms/interval" in head and "step" in head, out
+    assert head[-2:] == ["sys", "%"] and "malloc=retain" in out, out
     assert [r[2] for r in rows] == ["eager", "fused", "compiled"], out
     for r in rows:
         assert r[:2] == ["2x8", "16"], out
         for value in r[3:6]:  # substeps/s, ms/interval, ms/env step
             positive(value)
+        assert 0 <= float(r[7]) <= 100, out
 
 
 def test_bench_env_3d_smoke(tmp_path):
     out = script("bench_env.py", "--smoke", "--threads", "1", "--flow", "stochastic3d",
-                 "--n-waves", "4", "--kernels", "eager", "fused", cwd=tmp_path)
+                 "--n-waves", "4", "--kernels", "eager", "fused", "--malloc", "default",
+                 cwd=tmp_path)
+    assert "malloc=default" in out, out
     _, rows = table(out, "batch")
     assert [r[:3] for r in rows] == [["2x8", "16", "eager"]], out
     for value in rows[0][3:6]:
