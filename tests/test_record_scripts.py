@@ -84,3 +84,16 @@ def test_three_seed_tables_are_what_the_records_give():
     assert len(rows) >= 50 and not any("missing" in r for r in rows)
     page = set((folder / "README.md").read_text().splitlines())
     assert [r for r in rows if r not in page] == []
+
+
+def test_three_d_tables_are_what_the_records_give():
+    """three_d/summarise.py on the committed runs and comparisons prints tables whose every
+    row is in three_d/README.md, one row per committed run."""
+    folder = ROOT / "docs" / "results" / "three_d"
+    out = subprocess.run([sys.executable, str(folder / "summarise.py")], capture_output=True,
+                         text=True, check=True, cwd=ROOT).stdout
+    rows = [line for line in out.splitlines() if line.startswith("|")]
+    runs = [r for r in rows if r.startswith("| `ku")]
+    assert len(runs) == len(list((folder / "runs").iterdir())) >= 6
+    page = set((folder / "README.md").read_text().splitlines())
+    assert [r for r in rows if r not in page] == []
