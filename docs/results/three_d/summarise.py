@@ -10,72 +10,64 @@ tables of README.md: ``python summarise.py [runs] [compare]``.
   flow, ± SEM), the smart rows named by their run's seed.
 """
 # ruff: noqa: E501
-import csv
 import json
 import re
 import sys
 from pathlib import Path
 
+import numpy as np
+
+from swimrl.paper.three_d import read_comparisons, read_runs
+from swimrl.policies.baselines import StrategyLabel
+from swimrl.runs.curves import read_curves
+
 R = Path(__file__).resolve().parent
-
-
-def _run_key(path: Path) -> tuple[float, int]:
-    ku, seed = re.fullmatch(r"ku([^_]+)_seed(\d+)", path.name).groups()
-    return float(ku), int(seed)
-
-
-def _curve(path: Path) -> tuple[list[tuple[int, float, float]], int]:
-    """The held-out points ``(frames, R_hat, SEM)`` of ``curves.csv`` and its last frame count."""
-    rows = list(csv.DictReader(path.open()))
-    points = [(int(r["frames"]), float(r["eval/R_hat"]), float(r["eval/R_hat_sem"]))
-              for r in rows if r.get("eval/R_hat")]
-    return points, int(rows[-1]["frames"])
 
 
 def runs() -> None:
     print("| run | frames | updates | training h | frames/s | final R̂ (10 × 200; seed) | held-out R̂ (16 × 32) at 0, 2e7, 4e7, 6e7, 8e7, 1e8 frames |")
     print("|---|---|---|---|---|---|---|")
-    for path in sorted((R / "runs").iterdir(), key=_run_key):
-        points, last = _curve(path / "curves.csv")
-        held = ", ".join(f"{r:.3f}" for _, r, _ in points)
-        if points:
-            held += f" ± {points[-1][2]:.3f}"
-        metrics = path / "metrics.json"
-        if metrics.exists():
-            m = json.loads(metrics.read_text())
-            t = m["training"]
-            print(f"| `{path.name}` | {t['frames']:.3e} | {t['updates']} | {t['wall_s'] / 3600:.2f} | "
-                  f"{t['frames_per_s']:.2e} | {m['R_hat_mean']:.3f} ± {m['R_hat_sem']:.3f} ({m['seed']}) | {held} |")
-        else:
-            print(f"| `{path.name}` | {last:.3e} (checkpoint) | | | | | {held} |")
+    for seeds in read_runs(R / "runs").values():
+        for path in seeds.values():
+            curve = read_curves(path)
+            held_out = ~np.isnan(curve["eval/R_hat"])
+            held = ", ".join(f"{r:.3f}" for r in curve["eval/R_hat"][held_out])
+            if held_out.any():
+                held += f" ± {curve['eval/R_hat_sem'][held_out][-1]:.3f}"
+            metrics = path / "metrics.json"
+            if metrics.exists():
+                m = json.loads(metrics.read_text())
+                t = m["training"]
+                print(f"| `{path.name}` | {t['frames']:.3e} | {t['updates']} | {t['wall_s'] / 3600:.2f} | "
+                      f"{t['frames_per_s']:.2e} | {m['R_hat_mean']:.3f} ± {m['R_hat_sem']:.3f} ({m['seed']}) | {held} |")
+            else:
+                print(f"| `{path.name}` | {int(curve['frames'][-1]):.3e} (checkpoint) | | | | | {held} |")
 
 
-def _label(label: str) -> str:
-    run = re.search(r"ku[^_/]+_seed(\d+)", label)
-    if label.startswith("policy") and run:
-        return f"smart (seed {run.group(1)})"
-    naive = re.fullmatch(r"naive\(([+-]?[\d.]+)\)", label)
-    if naive:
-        return f"naive (Λ = {float(naive.group(1)):g})"
-    return "STO" if label == "sto" else label
+def _label(text: str) -> str:
+    label = StrategyLabel.parse(text)
+    if label == StrategyLabel.sto():
+        return "STO"
+    if label.name == "naive" and label.arg:
+        return f"naive (Λ = {float(label.arg):g})"
+    run = re.search(r"ku[^_/]+_seed(\d+)", text)
+    return f"smart (seed {run.group(1)})" if label.name == "policy" and run else text
 
 
 def compare() -> None:
-    paths = sorted((R / "compare").glob("ku*/comparison.json"), key=lambda p: float(p.parent.name[2:]))
-    if not paths:
+    comparisons = read_comparisons(R / "compare")
+    if not comparisons:
         print("(no finished comparison under compare/)")
         return
     print("| Ku | flows × swimmers (seed) | strategy | R̂ ± SEM | × STO (paired) |")
     print("|---|---|---|---|---|")
-    for path in paths:
-        d = json.loads(path.read_text())
-        ku = f"{d['config']['flow']['kubo']:g}"
+    for ku, d in comparisons.items():
         size = f"{d['n_flows']} × {d['n_swimmers']} ({d['seed']})"
         first = d["rows"][0]["label"]
         for row in d["rows"]:
             ratio = (f"{row['ratio_to_first']:.3f} ± {row['ratio_sem']:.3f}"
                      if row["label"] != first else "1")
-            print(f"| {ku} | {size} | {_label(row['label'])} | "
+            print(f"| {ku:g} | {size} | {_label(row['label'])} | "
                   f"{row['R_hat_mean']:.3f} ± {row['R_hat_sem']:.3f} | {ratio} |")
 
 
