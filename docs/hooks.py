@@ -29,12 +29,25 @@ two.
   parents; ``~`` shows the last name only. A target the API pages do not show (private, or
   outside swimrl) stays code.
 * **Changelog.** ``CHANGELOG.md`` (repository root) is also the page ``changelog.md``.
+* **MathJax, served by the site.** The equations are typeset by MathJax 3 (SVG output, every
+  TeX extension in one file), copied into the site from the ``django-static-mathjax``
+  package of the docs extras: no CDN is needed to read them (:func:`vendored_mathjax`).
+* **Figures.** An image alone at the start of a paragraph (the GitHub-readable form
+  ``![alt](figure.png)`` followed on the next lines by the caption text) becomes a
+  ``<figure>``: the image links to itself at full size and the text is its ``<figcaption>``.
+  An image without a caption is a warning, so a strict build fails on it (:func:`figures`).
+* **Records in the site.** The record files of ``docs/results/`` (JSON, CSV, YAML, logs,
+  ``.npz``) are files of the site, so a claim's link opens its record in a local build; a
+  link to a record directory without a README opens a generated listing of its files
+  (:func:`record_listings`). Only the policies' ``.pt`` files stay out (``exclude_docs``);
+  a link to one goes into the repository.
 """
 
 from __future__ import annotations
 
 import functools
 import logging
+import os
 import posixpath
 import re
 from pathlib import Path
@@ -89,9 +102,59 @@ def on_config(config):
     return config
 
 
-# -- files: the example scripts and the changelog ---------------------------------------------
+# -- files: MathJax, record listings, the example scripts and the changelog -------------------
+#: Where the site serves MathJax (``mkdocs.yml``'s ``extra_javascript``), and the component.
+MATHJAX_SITE = "javascripts/vendor/mathjax"
+MATHJAX_COMPONENT = "tex-svg-full.js"
+
+
+def vendored_mathjax() -> Path:
+    """The ``es5/`` folder of MathJax 3 in the ``django-static-mathjax`` package (the docs
+    extras), found without importing it (it is a Django app)."""
+    import importlib.util
+
+    spec = importlib.util.find_spec("mathjax")
+    es5 = None
+    for location in (spec.submodule_search_locations or []) if spec else []:
+        candidate = Path(location) / "static" / "mathjax" / "es5"
+        if (candidate / MATHJAX_COMPONENT).is_file():
+            es5 = candidate
+    if es5 is None:
+        raise RuntimeError("MathJax not found: the docs need the docs extras "
+                           "(pip install -e '.[dev,docs]', which installs django-static-mathjax)")
+    return es5
+
+
+def record_listings(files: Files, config) -> list[File]:
+    """A page ``<dir>/index.md`` listing the files of every folder under ``docs/results/``
+    that the site has no README page for, so a link to such a record folder opens in the
+    site (:func:`on_page_markdown` sends folder links to ``README.md``, else ``index.md``)."""
+    docs = Path(config.docs_dir)
+    pages = []
+    # os.walk follows the folder links of docs/results/ (paper_runs/ links its runs)
+    folders = [Path(d) / name for d, names, _ in os.walk(docs / "results", followlinks=True)
+               for name in names]
+    for folder in sorted(folders):
+        rel = folder.relative_to(docs).as_posix()
+        if in_site(files, f"{rel}/README.md") or files.get_file_from_path(f"{rel}/index.md"):
+            continue
+        lines = [f"# `docs/{rel}/`", "",
+                 "The files of this record folder (the policies' `.pt` files open from the "
+                 "repository).", ""]
+        for child in sorted(folder.iterdir()):
+            name = child.name + ("/" if child.is_dir() else "")
+            lines.append(f"- [`{name}`]({child.name}{'/' if child.is_dir() else ''})")
+        pages.append(File.generated(config, f"{rel}/index.md", content="\n".join(lines) + "\n"))
+    return pages
+
+
 def on_files(files: Files, config) -> Files:
     root = repo_root(config)
+    es5 = vendored_mathjax()
+    files.append(File.generated(config, f"{MATHJAX_SITE}/{MATHJAX_COMPONENT}",
+                                abs_src_path=str(es5 / MATHJAX_COMPONENT)))
+    for page in record_listings(files, config):
+        files.append(page)
     for script in sorted((root / EXAMPLES).glob("*.py")):
         files.append(File.generated(config, f"{EXAMPLES}/{script.name}",
                                     abs_src_path=str(script)))
@@ -134,9 +197,10 @@ def on_page_markdown(markdown: str, page, config, files: Files) -> str:
             return m.group(0)                                # left to mkdocs' own link check
         if (docs / rel).is_file() and in_site(files, rel):
             return m.group(0)                                # a page or a file of the site
-        readme = posixpath.join(rel, "README.md")
-        if (docs / rel).is_dir() and in_site(files, readme):
-            return f"[{text}]({posixpath.relpath(readme, here or '.')}{suffix})"
+        for index in ("README.md", "index.md"):        # index.md: a record listing
+            readme = posixpath.join(rel, index)
+            if (docs / rel).is_dir() and in_site(files, readme):
+                return f"[{text}]({posixpath.relpath(readme, here or '.')}{suffix})"
         url = repo_link(config, posixpath.join(docs_rel, rel), (docs / rel).is_dir())
         if url is not None:
             return f"[{text}]({url})"
@@ -215,7 +279,38 @@ def resolve(target: str, context: str, root: str) -> str | None:
     return None
 
 
+# -- figures: an image paragraph becomes a <figure> with its caption -------------------------
+#: A paragraph that starts with one or more images; the rest of it is the caption.
+FIGURE = re.compile(r"<p>(?P<images>(?:\s*<img [^>]*>)+)(?P<caption>.*?)</p>", re.S)
+IMG_SRC = re.compile(r'<img [^>]*src="(?P<src>[^"]+)"[^>]*>')
+figure_log = logging.getLogger("mkdocs.plugins.swimrl.figures")
+
+
+def figures(html: str, page) -> str:
+    """``html`` with each image paragraph as a ``<figure>``: each image a link to itself at
+    full size (a wide figure is shown at the column's width), the paragraph's text after the
+    images its ``<figcaption>``; an image with no caption text is logged as a warning."""
+
+    def figure(m: re.Match) -> str:
+        caption = m.group("caption").strip()
+        caption = re.sub(r"^<br\s*/?>", "", caption).strip()
+        images = IMG_SRC.sub(
+            lambda i: f'<a class="swimrl-enlarge" href="{i.group("src")}" '
+                      f'title="Open the figure at full size">{i.group(0)}</a>',
+            m.group("images").strip())
+        if not re.sub(r"<[^>]+>", "", caption).strip():
+            figure_log.warning("%s: a figure without a caption (%s): write its caption on the "
+                               "line after the image", page.file.src_uri,
+                               ", ".join(IMG_SRC.findall(m.group("images"))))
+            return f'<figure class="swimrl-figure">{images}</figure>'
+        return (f'<figure class="swimrl-figure">{images}'
+                f"<figcaption>{caption}</figcaption></figure>")
+
+    return FIGURE.sub(figure, html)
+
+
 def on_page_content(html: str, page, config, files: Files) -> str:
+    html = figures(html, page)
     if not page.file.src_uri.startswith("api/"):
         return html
     root = str(repo_root(config))

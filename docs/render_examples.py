@@ -65,7 +65,8 @@ def page_code_blocks(page: str) -> list[str]:
 
 
 def run_cell(code: str, namespace: dict, name: str, index: int, files: Path) -> tuple[str, list]:
-    """Run ``code``; what it printed and the figures it left open (saved, then closed)."""
+    """Run ``code``; what it printed and the figures it left open (saved, then closed), each
+    with its caption."""
     import matplotlib.pyplot as plt
 
     buffer = io.StringIO()
@@ -75,9 +76,22 @@ def run_cell(code: str, namespace: dict, name: str, index: int, files: Path) -> 
     for k, number in enumerate(plt.get_fignums()):
         path = files / f"{name}_{index}_{k}.png"
         plt.figure(number).savefig(path, dpi=100)
-        figures.append(path)
+        figures.append((path, figure_caption(path, number)))
     plt.close("all")
     return buffer.getvalue(), figures
+
+
+def figure_caption(path: Path, number: int) -> str:
+    """The caption of a figure a cell left open: its (sup)title and its panels' titles."""
+    import matplotlib.pyplot as plt
+
+    fig = plt.figure(number)
+    titles = [ax.get_title() for ax in fig.axes if ax.get_title()]
+    suptitle = fig._suptitle.get_text() if fig._suptitle is not None else ""
+    panels = (titles[0] if len(titles) == 1 else
+              "; ".join(f"({chr(97 + i)}) {t}" for i, t in enumerate(titles)))
+    what = ". ".join(t for t in (suptitle, panels) if t)
+    return f"The figure the cell above draws{': ' + what if what else ''}."
 
 
 def render(name: str) -> Path:
@@ -105,7 +119,9 @@ def render(name: str) -> Path:
         printed, figures = run_cell(text, namespace, name, index, files)
         if printed.strip():
             parts.append(f"```text\n{printed.rstrip()}\n```")
-        parts += [f"![{name}: figure of cell {index}]({name}_files/{f.name})" for f in figures]
+        # the image, and on the next line its caption (docs/hooks.py makes them a <figure>)
+        parts += [f"![{name}: figure of cell {index}]({name}_files/{f.name})\n{caption}"
+                  for f, caption in figures]
     page = PAGES / f"{name}.md"
     page.write_text("\n\n".join(parts) + "\n", encoding="utf-8")
     print(f"{page.relative_to(ROOT)}: {time.time() - start:.0f} s", file=sys.stderr)

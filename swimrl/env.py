@@ -1,17 +1,20 @@
 r"""TorchRL environment: batched swimmers in batched flows.
 
 Batch shape ``(n_flows, n_swimmers)``: swimmer ``(f, s)`` moves in flow realisation ``f``.
-One environment step is one decision interval ``T_u``: the action ``Lambda`` (shape factor,
-bounded to ``[-Lambda_max, Lambda_max]``) is held while the dynamics
-(:mod:`swimrl.physics.swimmer`) is integrated over ``T_u / dt`` Heun steps. Reward
+One environment step is one decision interval $T_u$: the action $\Lambda$ (shape factor,
+bounded to $[-\Lambda_\mathrm{max}, \Lambda_\mathrm{max}]$) is held while the dynamics
+(:mod:`swimrl.physics.swimmer`) is integrated over $T_u / \delta t$ Heun steps. Reward
 (``eq:reward``, ``task=displacement``):
 
-``r_i = |x(t_i) - x_0| - |x(t_{i-1}) - x_0|``,
+$$
+r_i = |\boldsymbol x(t_i) - \boldsymbol x_0| - |\boldsymbol x(t_{i-1}) - \boldsymbol x_0|,
+$$
 
-so the undiscounted return telescopes to ``|x(t_N) - x_0|`` (flow length units); with
-``task=target`` it is the decrease of the distance to the target, and ``reward.*`` adds the
-energy costs (:mod:`swimrl.task`). Episodes are truncated when their flow has run
-``N = T / T_u`` decisions; with ``task=target`` a swimmer that arrives is terminated. Keys:
+so the undiscounted return telescopes to $|\boldsymbol x(t_N) - \boldsymbol x_0|$ (flow length
+units); with ``task=target`` it is the decrease of the distance to the target, and
+``reward.*`` adds the energy costs (:mod:`swimrl.task`). Episodes are truncated when their
+flow has run $N = T / T_u$ decisions; with ``task=target`` a swimmer that arrives is
+terminated. Keys:
 
 * ``observation`` – the configured signal subset (``signals.names``), ``(F, S, k)``;
 * ``signals`` – all five signals in :data:`swimrl.physics.signals.SIGNAL_NAMES` order (baselines);
@@ -29,8 +32,14 @@ start from the same positions and orientations (common random numbers: one block
 strategy in a paired comparison); the draws are those of an environment of ``S / B``
 swimmers.
 Positions are kept as a wrapped coordinate in ``[0, L)`` plus integer image counts, so the
-unbounded displacement ``x - x_0 = (p - p_0) + L (m - m_0)`` keeps float32 resolution of the
-grid cell however far the swimmer goes.
+unbounded displacement
+
+$$
+\boldsymbol x - \boldsymbol x_0
+  = (\boldsymbol p - \boldsymbol p_0) + L (\boldsymbol m - \boldsymbol m_0)
+$$
+
+keeps float32 resolution of the grid cell however far the swimmer goes.
 """
 
 from __future__ import annotations

@@ -1,29 +1,34 @@
 r"""What the swimmers are asked to do (``task=``) and what swimming costs (``reward.*``).
 
 ``task=displacement`` (the paper): get far from the start point; the reward per decision is
-``r_i = |x(t_i) - x_0| - |x(t_{i-1}) - x_0|``, the signals are taken in the polar frame of
-``x - x_0``.
+$r_i = |\boldsymbol x(t_i) - \boldsymbol x_0| - |\boldsymbol x(t_{i-1}) - \boldsymbol x_0|$,
+the signals are taken in the polar frame of $\boldsymbol x - \boldsymbol x_0$.
 
 ``task=target`` (point-to-point navigation): each swimmer gets a target
-``X = x_0 + D (cos phi, sin phi)``, ``D`` = ``task.distance`` in units of the flow length
-``ell_f``, ``phi`` uniform; with ``rho = |X - x|`` the reward per decision is
+$\boldsymbol X = \boldsymbol x_0 + D(\cos\varphi, \sin\varphi)$, $D$ = ``task.distance`` in
+units of the flow length $\ell_f$, $\varphi$ uniform; with
+$\rho = |\boldsymbol X - \boldsymbol x|$ the reward per decision is
 
-``r_i = rho(t_{i-1}) - rho(t_i)``,
+$$
+r_i = \rho(t_{i-1}) - \rho(t_i),
+$$
 
-which telescopes to ``D - rho_final``. A swimmer with ``rho <= task.arrival_radius``
-(``ell_f``) has arrived: its episode ends (``terminated``, no bootstrap), it stops (no further
-motion, reward or energy) and stays counted as arrived. The signals are taken in the frame
-of ``X - x`` (``n_r = n . e``, ``e`` the unit vector towards the target).
+which telescopes to $D - \rho_\mathrm{final}$. A swimmer with $\rho \le$
+``task.arrival_radius`` ($\ell_f$) has arrived: its episode ends (``terminated``, no
+bootstrap), it stops (no further motion, reward or energy) and stays counted as arrived.
+The signals are taken in the frame of $\boldsymbol X - \boldsymbol x$
+($n_r = \boldsymbol n\cdot\boldsymbol e$, $\boldsymbol e$ the unit vector towards the target).
 
-In both tasks the performance index is the undiscounted return over ``v_s T``
-(``R_hat = |x(T) - x_0| / (v_s T)``, resp. ``(D - rho_final) / (v_s T)``).
+In both tasks the performance index is the undiscounted return over $v_s T$
+($\hat R = |\boldsymbol x(T) - \boldsymbol x_0|/(v_s T)$, resp.
+$(D - \rho_\mathrm{final})/(v_s T)$).
 
-Energy (``reward.*``, :mod:`swimrl.physics.energy`): a decision with shape factor ``Lambda_i``
-costs ``w K(Lambda_i) v_s T_u`` (``w`` = ``reward.energy_weight``) plus, optionally,
-``w_c |Lambda_i - Lambda_{i-1}| v_s T_u`` (``w_c`` = ``reward.shape_change_weight``; none at a
-swimmer's first decision), so the return over ``v_s T`` is ``R_hat - w E_hat - ...`` with
-``E_hat = (1/T) int K(Lambda) dt`` the work against drag in units of the equal-volume
-sphere's ``6 pi mu a v_s^2 T``.
+Energy (``reward.*``, :mod:`swimrl.physics.energy`): a decision with shape factor $\Lambda_i$
+costs $w\,K(\Lambda_i)\,v_s T_u$ ($w$ = ``reward.energy_weight``) plus, optionally,
+$w_c\,|\Lambda_i - \Lambda_{i-1}|\,v_s T_u$ ($w_c$ = ``reward.shape_change_weight``; none at
+a swimmer's first decision), so the return over $v_s T$ is $\hat R - w\hat E - \dots$ with
+$\hat E = \frac1T\int K(\Lambda)\,\mathrm dt$ the work against drag in units of the
+equal-volume sphere's $6\pi\mu a\,v_s^2 T$.
 """
 
 from __future__ import annotations
@@ -39,8 +44,8 @@ TASKS = ("displacement", "target")
 
 @dataclass(frozen=True)
 class TaskSpec:
-    """``task.*``: the task's name, the target distance ``D`` and the arrival radius (both in
-    units of ``ell_f``; read by ``task=target`` only). The defaults are read from
+    r"""``task.*``: the task's name, the target distance $D$ and the arrival radius (both in
+    units of $\ell_f$; read by ``task=target`` only). The defaults are read from
     ``conf/task/displacement.yaml`` (:mod:`swimrl.conf_values`).
 
     Parameters
@@ -49,7 +54,7 @@ class TaskSpec:
         ``displacement`` (the paper's: get far from the start) or ``target``
         (point-to-point navigation), one of :data:`TASKS`.
     distance
-        ``task=target``: the distance ``D`` of each swimmer's target from its start.
+        ``task=target``: the distance $D$ of each swimmer's target from its start.
     arrival_radius
         ``task=target``: a swimmer this close to its target has arrived, ``< distance``.
     """
@@ -74,17 +79,17 @@ class TaskSpec:
 
 @dataclass(frozen=True)
 class RewardSpec:
-    """``reward.*``: weights of the energy cost ``w K(Lambda) v_s T_u`` and of the
-    shape-change cost ``w_c |Delta Lambda| v_s T_u`` per decision (0: the paper's reward).
+    r"""``reward.*``: weights of the energy cost $w\,K(\Lambda)\,v_s T_u$ and of the
+    shape-change cost $w_c\,|\Delta\Lambda|\,v_s T_u$ per decision (0: the paper's reward).
     The defaults are read from ``conf/evaluate.yaml`` (:mod:`swimrl.conf_values`).
 
     Parameters
     ----------
     energy_weight
-        ``w >= 0``: the cost of the drag of the shape, ``K(Lambda)``
+        $w \ge 0$: the cost of the drag of the shape, $K(\Lambda)$
         (:func:`~swimrl.physics.energy.drag_factor`).
     shape_change_weight
-        ``w_c >= 0``: the cost of changing the shape between decisions.
+        $w_c \ge 0$: the cost of changing the shape between decisions.
     """
 
     energy_weight: float = yaml_value("evaluate", "reward.energy_weight")

@@ -21,7 +21,8 @@ row in ``unrecorded`` with the reason, and each must appear in its row. Then no 
 number, percentage or ``N SEM`` of a row's measurement (its third cell before ``Record:``)
 may be left that is neither checked nor listed: a number added to the page without a record
 check fails until it gets one or is listed with its reason. Ku values, sizes written as
-``10^k``, ``NeK`` or ``15.36M`` and code spans are not counted (:data:`NOT_COUNTED`).
+``NeK`` (``8e7``, the page's one notation for powers of ten) or ``15.36M`` and code spans
+are not counted (:data:`NOT_COUNTED`).
 
 The verdict cells (fourth column) are not scanned for coverage; a :class:`Check` may still
 quote them (``where="verdict"``). Reads JSON and CSV only; well under a second.
@@ -57,13 +58,12 @@ FIGURE_TABLES = {
 }
 
 KUS = ("ku0.1", "ku1", "ku10", "ku1e7")
-KU_VALUE = r"(?:0\.1|1e7|10\^7|10|1)(?![\d.^e])"
-#: Not counted as quoted numbers: Ku values, powers of ten, 1e8-style and 15.36M-style sizes,
-#: code spans (file and run names).
+KU_VALUE = r"(?:0\.1|1e7|10|1)(?![\d.e])"
+#: Not counted as quoted numbers: Ku values, 1e8-style and 15.36M-style sizes, code spans (file
+#: and run names).
 NOT_COUNTED = [
     re.compile(r"`[^`]*`"),
     re.compile(rf"Ku\s*(?:=|≤|≥|<|>)\s*{KU_VALUE}(?:(?:\s*,\s*|\s+and\s+|\s*-\s*){KU_VALUE})*"),
-    re.compile(r"(?:\d+(?:\.\d+)?\s*×\s*)?10\^[−-]?\d+"),
     re.compile(r"\d+(?:\.\d+)?e[−-]?\d+"),
     re.compile(r"\d+(?:\.\d+)?M\b"),
 ]
@@ -287,7 +287,7 @@ def _smart_naive_1e7() -> str:
 
 def _single_flow() -> str:
     ev = rec("figures/smartPerformance.json")["evaluations"]
-    label = {"ku0.1": "Ku = 0.1", "ku1": "Ku = 1", "ku10": "Ku = 10", "ku1e7": "Ku = 10^7"}
+    label = {"ku0.1": "Ku = 0.1", "ku1": "Ku = 1", "ku10": "Ku = 10", "ku1e7": "Ku = 1e7"}
     return ", ".join(
         " / ".join(num(ev[k]["derived"]["mean"][n]) for n in ("smart", "STO", "naive"))
         + f" ({label[k]})" for k in KUS)
@@ -319,7 +319,7 @@ def _ku_inf_sizes() -> str:
     n = e["counts"]["decisions"]
     assert n == e["setup"]["n_flows"] * e["setup"]["n_swimmers"] * r["params"]["n_decisions"]
     return (f"{e['setup']['n_flows']} frozen flows × {e['setup']['n_swimmers']} swimmers, "
-            f"{n / 1e7:g} × 10^7 decisions")
+            f"{sci(n)} decisions")
 
 
 def _map_corr(ku: str, maps=("n_theta", "omega")) -> list[float]:
@@ -332,7 +332,7 @@ def _snn_tail() -> str:
     tails = {round(ev[f"ku1e7_seed{s}"]["derived"]["snn"][k] / 1e5)
              for s in "012" for k in ("n_low", "n_high")}
     assert len(tails) == 1, tails
-    return f"{tails.pop()} × 10^5 decisions in the tail"
+    return f"{tails.pop()}e5 decisions in the tail"
 
 
 def _corr_range(ku: str) -> float:
@@ -457,7 +457,7 @@ def _min_std() -> str:
     by_ku = {k: _one(rec(f"paper_runs/{k}_seed{s}/metrics.json")["config"]["model"]["min_std"]
                      for s in "012") for k in KUS}
     assert by_ku["ku0.1"] == by_ku["ku1"] == by_ku["ku10"]
-    return f"σ ≥ {by_ku['ku10']:g} (Ku ≤ 10) or ≥ {by_ku['ku1e7']:g} (10^7)"
+    return f"σ ≥ {by_ku['ku10']:g} (Ku ≤ 10) or ≥ {by_ku['ku1e7']:g} (1e7)"
 
 
 def _curve_last(ku: str) -> list[float]:
@@ -566,7 +566,7 @@ def _scan_rising(ku: str) -> bool:
 
 
 def _scan_top() -> str:
-    """Ku = 10 and 10^7: the rise, the best and its lead over the next shape."""
+    """Ku = 10 and 1e7: the rise, the best and its lead over the next shape."""
     kus = ("ku10", "ku1e7")
     assert all(_scan_rising(k) for k in kus)
     (best,) = {_scan_best(k) for k in kus}
@@ -832,8 +832,8 @@ ROWS: dict[int, Spec] = {
         C("9 constant Λ from −0.98 to 0.98", lambda: "{} constant Λ from {} to {}".format(*_one(
             (len(_scan(k)), _lam(min(_scan(k))), _lam(max(_scan(k)))) for k in KUS))))),
     4: Spec("json", (
-        C("by 0.046 ± 0.006 (Ku = 10^7) and 0.065 ± 0.014 (Ku = 10)", lambda: (
-            f"by {_oe_diff('ku1e7', '5')} (Ku = 10^7) and {_oe_diff('ku10', '5')} (Ku = 10)")),
+        C("by 0.046 ± 0.006 (Ku = 1e7) and 0.065 ± 0.014 (Ku = 10)", lambda: (
+            f"by {_oe_diff('ku1e7', '5')} (Ku = 1e7) and {_oe_diff('ku10', '5')} (Ku = 10)")),
         C("by 0.874 ± 0.034 at 100 τ_K", lambda: "by " + _oe_diff("ku1e7", "100").lstrip("−-")
           + " at 100 τ_K"),
         C("0.462 of the", lambda: f"{num(_oe('ku1e7')['confined_fraction']['-0.98'])} of the"),
@@ -866,13 +866,13 @@ ROWS: dict[int, Spec] = {
     12: Spec("json", (C("1.174 ± 0.035 / 1.081 ± 0.032 / 1.179 ± 0.033", _smart_naive_1e7),)),
     13: Spec("json", (C("0.995, 1.065, 1.296, 1.145",
                         lambda: nums([_best_baseline(k) for k in KUS])),)),
-    14: Spec("json", (C("1.296 (Ku = 10) and 1.145 (10^7), against 0.995 and 1.065",
+    14: Spec("json", (C("1.296 (Ku = 10) and 1.145 (1e7), against 0.995 and 1.065",
                         lambda: f"{num(_best_baseline('ku10'))} (Ku = 10) and "
-                                f"{num(_best_baseline('ku1e7'))} (10^7), against "
+                                f"{num(_best_baseline('ku1e7'))} (1e7), against "
                                 f"{num(_best_baseline('ku0.1'))} and "
                                 f"{num(_best_baseline('ku1'))}"),)),
     15: Spec("json", (C("0.946 / 0.951 / 0.373 (Ku = 0.1), 0.680 / 0.635 / 0.242 (Ku = 1), "
-                        "0.697 / 0.514 / 0.326 (Ku = 10), 0.611 / 0.387 / 0.349 (Ku = 10^7)",
+                        "0.697 / 0.514 / 0.326 (Ku = 10), 0.611 / 0.387 / 0.349 (Ku = 1e7)",
                         _single_flow),)),
     16: Spec("figure only"),
     17: Spec("json", (C("−0.68 / −0.65 / −0.64",
@@ -926,16 +926,16 @@ ROWS: dict[int, Spec] = {
             [_orient(r)["corr_time_omega_over_tau_K"] for r in KU1_RUNS], 2) + " τ_K"))),
     20: Spec("json", (
         C("8 flows × 100 swimmers each", _search_sizes),
-        C("0.95 / 0.87 / 0.76 / 0.77 at Ku = 0.1 / 1 / 10 / 10^7", lambda: " / ".join(
+        C("0.95 / 0.87 / 0.76 / 0.77 at Ku = 0.1 / 1 / 10 / 1e7", lambda: " / ".join(
             num(_search(k)["R2_mean"]["n_theta,S_np,omega"], 2) for k in KUS)
-          + " at Ku = 0.1 / 1 / 10 / 10^7"),
+          + " at Ku = 0.1 / 1 / 10 / 1e7"),
         C("The best triple is `(n_θ, S_np, ω)` for every seed at every Ku", _search_best),
         C("(0.55 ± 0.02, 0.59 ± 0.03, mean ± std over seeds)", lambda: "({}, {}, mean ± std "
           "over seeds)".format(*(pm(_search(k)["R2_mean"]["n_r,S_np,omega"],
                                     _search(k)["R2_std"]["n_r,S_np,omega"], 2)
                                  for k in ("ku10", "ku1e7")))),
-        C("second at Ku = 10 and 10^7", lambda: "second at Ku = " + " and ".join(
-            k for k, ku in (("10", "ku10"), ("10^7", "ku1e7"))
+        C("second at Ku = 10 and 1e7", lambda: "second at Ku = " + " and ".join(
+            k for k, ku in (("10", "ku10"), ("1e7", "ku1e7"))
             if _search(ku)["ranked"]["3"][1] == "n_r,S_np,omega")),
         C("explains 0.91-0.93 at Ku ≥ 1", lambda: "explains " + span(
             [_search(k)["R2_mean"]["n_r,n_theta,S_np,omega"] for k in KUS[1:]], 2)
@@ -944,7 +944,7 @@ ROWS: dict[int, Spec] = {
     21: Spec("json", (
         C("`paper_runs/ku1e7_seed0/policy.pt`", _ku_inf_policy),
         C("which is the protocol's seed 2", _shipped_ku1e7_seed),
-        C("40 frozen flows × 1000 swimmers, 8 × 10^7 decisions", _ku_inf_sizes)),
+        C("40 frozen flows × 1000 swimmers, 8e7 decisions", _ku_inf_sizes)),
         unrecorded={"8000 decisions": "the plotting code (swimrl/paper/mechanism.py)",
                     "every 20th decision of 20 swimmers per flow":
                         "the recorder's sampling (swimrl/paper/mechanism.py)"}),
@@ -953,7 +953,7 @@ ROWS: dict[int, Spec] = {
     24: Spec("json", (
         C("41 % / 31 % / 41 %",
           lambda: " / ".join(pct(v) for v in _per_seed("kuInf", "p_pos_given_low"))),
-        C("8 × 10^5 decisions in the tail", _snn_tail),
+        C("8e5 decisions in the tail", _snn_tail),
         C("mean 38 ± 6 %", lambda: "mean " + mean_std(
             [100 * p for p in _per_seed("kuInf", "p_pos_given_low")], 0) + " %"))),
     25: Spec("json", (
@@ -966,9 +966,9 @@ ROWS: dict[int, Spec] = {
         C("−0.66, −0.56, −0.45, −0.44", lambda: nums(
             [rec("figures/ku_pattern.json")["derived"][k]["per_seed"]
              ["corr_Lambda_ntheta_Snp_mean"] for k in KUS], 2)),
-        C("range over seeds ≤ 0.04, 0.08 at 10^7",
+        C("range over seeds ≤ 0.04, 0.08 at 1e7",
           lambda: f"range over seeds ≤ {num(max(_corr_range(k) for k in KUS[:3]), 2)}, "
-                  f"{num(_corr_range('ku1e7'), 2)} at 10^7"))),
+                  f"{num(_corr_range('ku1e7'), 2)} at 1e7"))),
     27: Spec("json", (C("0.95-0.99", lambda: span(
         [v for k in KUS for v in _map_corr(k, ("omega",))], 2)),)),
     28: Spec("json", (C("1.291 / 1.285 / 1.312 × STO (± 0.005", lambda: _ratios("ku10", 3)),)),
@@ -1013,18 +1013,18 @@ ROWS: dict[int, Spec] = {
         C("0.664 ± 0.033", lambda: _early("nr_nth_snn_w", 3)))),
     34: Spec("json", (
         C("1.000 ± 0.001 (Ku = 0.1), 0.969 ± 0.003 (1), 0.931 ± 0.006 (10), "
-          "0.954 ± 0.016 (10^7)",
+          "0.954 ± 0.016 (1e7)",
           lambda: ", ".join(pm(_minimal(k, "minimal/smart")["value"],
                                _minimal(k, "minimal/smart")["sem"]) + f" ({lab})"
-                            for k, lab in zip(KUS, ("Ku = 0.1", "1", "10", "10^7"),
+                            for k, lab in zip(KUS, ("Ku = 0.1", "1", "10", "1e7"),
                                               strict=True))),
         C("minimal / STO 0.996, 1.043, 1.222, 1.358", lambda: "minimal / STO " + nums(
             [_minimal(k, "minimal/STO")["value"] for k in KUS])),
         C("20 flows × 500", lambda: "{n_flows} flows × {n_swimmers}".format(
             **rec("figures/ablation.json")["sizes"]["sweep"])),
-        C("12 and 11.5 SEM at Ku = 1 and 10, 2.9 SEM at 10^7",
+        C("12 and 11.5 SEM at Ku = 1 and 10, 2.9 SEM at 1e7",
           lambda: f"{_minimal_sems('ku1'):.0f} and {_minimal_sems('ku10'):.1f} SEM at Ku = 1 "
-                  f"and 10, {_minimal_sems('ku1e7'):.1f} SEM at 10^7", where="verdict"))),
+                  f"and 10, {_minimal_sems('ku1e7'):.1f} SEM at 1e7", where="verdict"))),
     35: Spec("json", (
         C("4.34 ± 0.05, 2.80 ± 0.03, 2.80 ± 0.07, 1.73 ± 0.12", lambda: ", ".join(
             pm(_fit(k)["coefficients"]["c1"], _fit(k)["flow_sem"]["c1"], 2) for k in KUS)),
@@ -1053,7 +1053,7 @@ ROWS: dict[int, Spec] = {
             for k in ("ku0.1", "ku1", "ku10", "ku1e7"))),
         C("1.011 ± 0.004, 1.021 ± 0.008, 1.009 ± 0.005", lambda: ", ".join(
             pm(v["ratio"], v["sem"]) for v in _dns_seeds()["ku10_over_ku1e7"].values())),
-        C("10^7 below 10 on every realisation", lambda: "10^7 below 10 on every realisation"
+        C("1e7 below 10 on every realisation", lambda: "1e7 below 10 on every realisation"
           if all(a < b for a, b in zip(_dns_ratio(policy("pretrained/ku1e7"))[2],
                                        _dns_ratio(policy("pretrained/ku10"))[2], strict=True))
           else "not on every realisation"))),
@@ -1141,7 +1141,7 @@ ROWS: dict[int, Spec] = {
           lambda: ("no entropy bonus" if _one(c["loss"]["entropy_coeff"]
                                               for c in _runs_config()) == 0 else "entropy")
           + f", λ_GAE = {_one(c['loss']['gae_lambda'] for c in _runs_config()):g}"),
-        C("σ ≥ 0.5 (Ku ≤ 10) or ≥ 0.3 (10^7)", _min_std))),
+        C("σ ≥ 0.5 (Ku ≤ 10) or ≥ 0.3 (1e7)", _min_std))),
     47: Spec("json", (
         C("16 flows × 32", lambda: "{} flows × {}".format(*_one(
             (c["train"]["eval_flows"], c["train"]["eval_swimmers"]) for c in _runs_config()))),
@@ -1170,14 +1170,14 @@ ROWS: dict[int, Spec] = {
         C("20 flows × 500", lambda: "{n_flows} flows × {n_swimmers}".format(
             **_noise()["sizes"]["sweep"])))),
     50: Spec("json", (
-        C("smart / STO 1.309-1.324 (± 0.01) up to 10^-2", lambda: "smart / STO {} (± {}) up to "
-          "10^-2".format(span(_noise()["derived"]["rot_diffusion"]["smart/STO"][:5]),
+        C("smart / STO 1.309-1.324 (± 0.01) up to 1e-2", lambda: "smart / STO {} (± {}) up to "
+          "1e-2".format(span(_noise()["derived"]["rot_diffusion"]["smart/STO"][:5]),
                          num(max(_noise()["derived"]["rot_diffusion"]["smart/STO_sem"][:5]),
                              2))),
-        C("1.266 ± 0.009 at 10^-1", lambda: pm(
+        C("1.266 ± 0.009 at 1e-1", lambda: pm(
             _noise()["derived"]["rot_diffusion"]["smart/STO"][5],
-            _noise()["derived"]["rot_diffusion"]["smart/STO_sem"][5]) + " at 10^-1"),
-        C("at 10^-1 smart 0.534, STO 0.421, naive 0.225", lambda: "at 10^-1 " + ", ".join(
+            _noise()["derived"]["rot_diffusion"]["smart/STO_sem"][5]) + " at 1e-1"),
+        C("at 1e-1 smart 0.534, STO 0.421, naive 0.225", lambda: "at 1e-1 " + ", ".join(
             f"{n} {num(_noise()['derived']['rot_diffusion']['mean'][n][5])}"
             for n in ("smart", "STO", "naive"))))),
     51: Spec("json", (
@@ -1301,6 +1301,14 @@ def test_the_counts_of_verdicts_add_up():
     for name in sections:
         assert table[name] == _counts([r for r in rows if r.section == name]), name
     assert table["all"] == _counts(rows)
+
+
+def test_the_page_writes_powers_of_ten_as_the_configs_take_them():
+    """``1e7``, ``5e-3`` (as ``flow.kubo=1e7``), never ``10^7`` or ``10⁷``; code spans and
+    LaTeX maths aside."""
+    text = re.sub(r"`[^`]*`|\$[^$\n]*\$|\\\(.*?\\\)", " ", PAGE.read_text(encoding="utf-8"))
+    found = re.findall(r".{0,30}(?:10\^|10[⁰¹²³⁴⁵⁶⁷⁸⁹⁻]).{0,10}", text)
+    assert not found, found
 
 
 @pytest.mark.parametrize("number", sorted(ROWS))

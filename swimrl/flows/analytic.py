@@ -1,31 +1,43 @@
 r"""Analytic flows: a constant velocity gradient, Arnold-Beltrami-Childress, 2D Taylor-Green.
 
-Each gives ``u(x, t)`` and ``A_ij = d_j u_i`` in closed form at batched positions
-``(F, S, d)`` (:class:`~swimrl.flows.pointwise.PointFlow`); reference scales as in 2D:
-``u_rms = <u.u>^{1/2}`` (all components, space average) and ``tau_K = <A_ij A_ij>^{-1/2}``.
+Each gives $\boldsymbol u(\boldsymbol x, t)$ and $A_{ij} = \partial_j u_i$ in closed form at
+batched positions ``(F, S, d)`` (:class:`~swimrl.flows.pointwise.PointFlow`); reference scales
+as in 2D: $u_\mathrm{rms} = \langle\boldsymbol u\cdot\boldsymbol u\rangle^{1/2}$ (all
+components, space average) and $\tau_K = \langle A_{ij}A_{ij}\rangle^{-1/2}$.
 
-* :class:`LinearFlow` (2D or 3D): ``u = A x`` with a constant matrix ``A`` (``flow.gradient``),
-  incompressible: ``tr A = 0`` is required (:func:`check_gradient`). No velocity scale
-  (``u_rms = None``: ``|u|`` grows with ``|x|``); ``tau_K = (A_ij A_ij)^{-1/2}``. The exact
-  test bed of Jeffery orbits (simple shear ``A = [[0, gamma, 0], [0, 0, 0], [0, 0, 0]]``).
+* :class:`LinearFlow` (2D or 3D): $\boldsymbol u = \mathbb A\boldsymbol x$ with a constant
+  matrix $\mathbb A$ (``flow.gradient``), incompressible: $\mathrm{tr}\,\mathbb A = 0$ is
+  required (:func:`check_gradient`). No velocity scale (``u_rms = None``: $|\boldsymbol u|$
+  grows with $|\boldsymbol x|$); $\tau_K = (A_{ij}A_{ij})^{-1/2}$. The exact test bed of
+  Jeffery orbits (simple shear
+  $\mathbb A = \begin{pmatrix}0&\gamma&0\\0&0&0\\0&0&0\end{pmatrix}$).
 * :class:`ABCFlow` (3D): a superposition of ABC flows (Arnold 1965, Childress 1970; Dombre
-  et al. 1986, J. Fluid Mech. 167, 353), term ``(A, B, C, k)``:
+  et al. 1986, J. Fluid Mech. 167, 353), term $(A, B, C, k)$:
 
-  ``u = (A sin(kz + phi) + C cos(ky + phi), B sin(kx + phi) + A cos(kz + phi),
-  C sin(ky + phi) + B cos(kx + phi))``,  ``phi(t) = eps sin(omega t)``.
+    $$
+    \begin{aligned}
+    \boldsymbol u = \big(&A\sin(kz + \phi) + C\cos(ky + \phi),\\
+    &B\sin(kx + \phi) + A\cos(kz + \phi),\\
+    &C\sin(ky + \phi) + B\cos(kx + \phi)\big),
+    \qquad \phi(t) = \epsilon\sin(\omega t).
+    \end{aligned}
+    $$
 
-  With ``eps = 0`` it is steady: one term is the stationary ABC flow of Colabrese et al.
-  2018 (Phys. Rev. Fluids 3, 084301; the default ``A = B = C = k = 1``), two terms, with
-  their parameters, the "stationary superposition of two ABC flows" of Gustavsson et al.
-  2017 (Eur. Phys. J. E 40, 110). Both of those flows are steady; the time dependence
-  here is the phase-modulated ABC flow of the kinematic-dynamo literature (Brummell,
-  Cattaneo & Tobias 2001, Fluid Dyn. Res. 28, 237: every argument shifted by
-  ``eps sin(omega t)``), i.e. the steady pattern translated by ``-phi/k (1, 1, 1)``:
-  incompressible and Beltrami (``curl u = k u`` per term) at every ``t``. Each term has
-  ``<|u|^2> = A^2 + B^2 + C^2``, ``<A_ij A_ij> = k^2 (A^2 + B^2 + C^2)``; terms of equal ``k``
-  add their amplitudes, terms of different ``k`` their moments.
+    With $\epsilon = 0$ it is steady: one term is the stationary ABC flow of Colabrese et al.
+    2018 (Phys. Rev. Fluids 3, 084301; the default $A = B = C = k = 1$), two terms, with
+    their parameters, the "stationary superposition of two ABC flows" of Gustavsson et al.
+    2017 (Eur. Phys. J. E 40, 110). Both of those flows are steady; the time dependence
+    here is the phase-modulated ABC flow of the kinematic-dynamo literature (Brummell,
+    Cattaneo & Tobias 2001, Fluid Dyn. Res. 28, 237: every argument shifted by
+    $\epsilon\sin(\omega t)$), i.e. the steady pattern translated by
+    $-\frac{\phi}{k}(1, 1, 1)$: incompressible and Beltrami
+    ($\nabla\times\boldsymbol u = k\boldsymbol u$ per term) at every $t$. Each term has
+    $\langle|\boldsymbol u|^2\rangle = A^2 + B^2 + C^2$,
+    $\langle A_{ij}A_{ij}\rangle = k^2(A^2 + B^2 + C^2)$; terms of equal $k$ add their
+    amplitudes, terms of different $k$ their moments.
 * :class:`TaylorGreenFlow` (2D, steady cellular flow):
-  ``u = U (sin kx cos ky, -cos kx sin ky)``; ``u_rms = U / sqrt(2)``, ``tau_K = 1/(U k)``.
+  $\boldsymbol u = U(\sin kx\cos ky, -\cos kx\sin ky)$; $u_\mathrm{rms} = U/\sqrt2$,
+  $\tau_K = 1/(Uk)$.
 
 Each is a flow of the registry (:mod:`swimrl.flows.registry`): ``flow=linear``, ``flow=abc``,
 ``flow=taylor_green`` (``conf/flow/*.yaml``). Their realisations are identical (the flows
@@ -75,10 +87,10 @@ def _number(v) -> float:
 
 
 def check_gradient(value) -> tuple[tuple[float, ...], ...]:
-    """``value`` as a traceless ``d x d`` matrix, ``d`` = 2 or 3, or a :class:`ConfigError`
+    r"""``value`` as a traceless $d\times d$ matrix, $d$ = 2 or 3, or a :class:`ConfigError`
     ``flow.gradient=VALUE is invalid: allowed a 2x2 or 3x3 matrix ... zero trace ...``.
 
-    ``|tr A| <= 1e-9 max |A_ij|`` passes (round-off of decimal entries)."""
+    $|\mathrm{tr}\,\mathbb A| \le 10^{-9}\max|A_{ij}|$ passes (round-off of decimal entries)."""
     shown = _plain(value)
     rows = shown if isinstance(shown, list) else None
     ok = (rows is not None and len(rows) in (2, 3)
@@ -95,11 +107,12 @@ def check_gradient(value) -> tuple[tuple[float, ...], ...]:
 
 
 class LinearFlow(PointFlow):
-    """``u(x) = A x``, ``d_j u_i = A_ij``: a constant velocity gradient in 2D or 3D.
+    r"""$\boldsymbol u(\boldsymbol x) = \mathbb A\boldsymbol x$, $\partial_j u_i = A_{ij}$: a
+    constant velocity gradient in 2D or 3D.
 
     ``gradient`` is checked by :func:`check_gradient` (key ``flow.gradient``); ``dim`` is
-    its size. ``u_rms = None`` (no velocity scale), ``tau_k = (A_ij A_ij)^{-1/2}``
-    (``inf`` for ``A = 0``).
+    its size. ``u_rms = None`` (no velocity scale), ``tau_k`` $= (A_{ij}A_{ij})^{-1/2}$
+    (``inf`` for $\mathbb A = 0$).
     """
 
     u_rms = None
@@ -116,7 +129,7 @@ class LinearFlow(PointFlow):
 
     def sample(self, pos: torch.Tensor, flows: torch.Tensor | None = None
                ) -> tuple[torch.Tensor, torch.Tensor]:
-        """``u_i = A_ij x_j`` ``(F', S, d)`` and ``A`` broadcast to ``(F', S, d, d)``."""
+        r"""$u_i = A_{ij}x_j$ ``(F', S, d)`` and $\mathbb A$ broadcast to ``(F', S, d, d)``."""
         self.flow_index(pos, flows)
         u = pos @ self.gradient.T
         return u, self.gradient.expand(*pos.shape[:2], self.dim, self.dim)
@@ -137,13 +150,17 @@ def _check_terms(terms) -> tuple[tuple[float, float, float, float], ...]:
 
 
 class ABCFlow(PointFlow):
-    """A superposition of (phase-modulated) Arnold-Beltrami-Childress flows in 3D.
+    r"""A superposition of (phase-modulated) Arnold-Beltrami-Childress flows in 3D.
 
-    ``u = sum_terms (A sin Z + C cos Y, B sin X + A cos Z, C sin Y + B cos X)`` with
-    ``X = k x + phi``, ``Y = k y + phi``, ``Z = k z + phi``, ``phi = eps sin(omega t)``
+    $$
+    \boldsymbol u = \sum_\mathrm{terms}
+    \big(A\sin Z + C\cos Y,\ B\sin X + A\cos Z,\ C\sin Y + B\cos X\big)
+    $$
+
+    with $X = kx + \phi$, $Y = ky + \phi$, $Z = kz + \phi$, $\phi = \epsilon\sin(\omega t)$
     (module docstring: forms and sources). ``terms = ((A, B, C, k), ...)``; ``modulation`` is
-    ``eps``, ``frequency`` is ``omega``. The gradient, ``A_ij = d_j u_i``, has a zero diagonal
-    (``u_x`` depends on ``y, z`` only, ...), so ``tr A = 0`` exactly.
+    $\epsilon$, ``frequency`` is $\omega$. The gradient, $A_{ij} = \partial_j u_i$, has a zero
+    diagonal ($u_x$ depends on $y, z$ only, ...), so $\mathrm{tr}\,\mathbb A = 0$ exactly.
     """
 
     dim = 3
@@ -172,16 +189,18 @@ class ABCFlow(PointFlow):
         self._bound = torch.full((self.n_flows,), bound, device=self.device, dtype=dtype)
 
     def speed_bound(self) -> torch.Tensor:
-        """``|u| <= sum_terms |(|A| + |C|, |B| + |A|, |C| + |B|)|``, ``(F,)``."""
+        r"""$|\boldsymbol u| \le \sum_\mathrm{terms}\big|(|A| + |C|, |B| + |A|, |C| + |B|)\big|$,
+        ``(F,)``."""
         return self._bound
 
     def phase(self, flows: torch.Tensor) -> torch.Tensor:
-        """``phi(t) = eps sin(omega t)`` of the flows ``(F', 1)``, computed in float64."""
+        r"""$\phi(t) = \epsilon\sin(\omega t)$ of the flows ``(F', 1)``, computed in float64."""
         return self.modulation * torch.sin(self.frequency * self.times(flows))
 
     def sample(self, pos: torch.Tensor, flows: torch.Tensor | None = None
                ) -> tuple[torch.Tensor, torch.Tensor]:
-        """``u`` ``(F', S, 3)`` and ``A_ij = d_j u_i`` ``(F', S, 3, 3)`` at ``pos``."""
+        r"""$\boldsymbol u$ ``(F', S, 3)`` and $A_{ij} = \partial_j u_i$ ``(F', S, 3, 3)`` at
+        ``pos``."""
         flows = self.flow_index(pos, flows)
         phi = self.phase(flows).to(self.dtype).unsqueeze(-1)         # (F', 1, 1)
         u = torch.zeros_like(pos)
@@ -202,10 +221,15 @@ class ABCFlow(PointFlow):
 
 
 class TaylorGreenFlow(PointFlow):
-    """The steady 2D Taylor-Green (cellular) flow ``u = U (sin kx cos ky, -cos kx sin ky)``.
+    r"""The steady 2D Taylor-Green (cellular) flow
+    $\boldsymbol u = U(\sin kx\cos ky, -\cos kx\sin ky)$.
 
-    ``A = U k [[cos kx cos ky, -sin kx sin ky], [sin kx sin ky, -cos kx cos ky]]``;
-    ``u_rms = U / sqrt(2)``, ``tau_K = 1 / (U k)``, vorticity ``omega = 2 U k sin kx sin ky``.
+    $$
+    \mathbb A = Uk\begin{pmatrix}\cos kx\cos ky & -\sin kx\sin ky\\
+    \sin kx\sin ky & -\cos kx\cos ky\end{pmatrix};
+    $$
+
+    $u_\mathrm{rms} = U/\sqrt2$, $\tau_K = 1/(Uk)$, vorticity $\omega = 2Uk\sin kx\sin ky$.
     """
 
     dim = 2
@@ -226,12 +250,13 @@ class TaylorGreenFlow(PointFlow):
                                  dtype=dtype)
 
     def speed_bound(self) -> torch.Tensor:
-        """``|u| <= |U|``, ``(F,)``."""
+        r"""$|\boldsymbol u| \le |U|$, ``(F,)``."""
         return self._bound
 
     def sample(self, pos: torch.Tensor, flows: torch.Tensor | None = None
                ) -> tuple[torch.Tensor, torch.Tensor]:
-        """``u`` ``(F', S, 2)`` and ``A_ij = d_j u_i`` ``(F', S, 2, 2)`` at ``pos``."""
+        r"""$\boldsymbol u$ ``(F', S, 2)`` and $A_{ij} = \partial_j u_i$ ``(F', S, 2, 2)`` at
+        ``pos``."""
         self.flow_index(pos, flows)
         amp, k = self.amplitude, self.wavenumber
         sx, sy = torch.sin(k * pos).unbind(-1)
@@ -245,8 +270,9 @@ class TaylorGreenFlow(PointFlow):
 # -- the registry's entries (flow=linear | abc | taylor_green) ---------------------------------
 @dataclass(frozen=True)
 class LinearSpec:
-    """``flow=linear``: ``u = A x`` with ``A`` = ``flow.gradient`` (2x2 or 3x3, traceless,
-    not zero: ``tau_K = (A_ij A_ij)^{-1/2}`` is the time unit). Defaults from
+    r"""``flow=linear``: $\boldsymbol u = \mathbb A\boldsymbol x$ with $\mathbb A$ =
+    ``flow.gradient`` ($2\times2$ or $3\times3$, traceless, not zero:
+    $\tau_K = (A_{ij}A_{ij})^{-1/2}$ is the time unit). Defaults from
     ``conf/flow/linear.yaml``."""
 
     gradient: tuple = yaml_value("flow/linear", "gradient")

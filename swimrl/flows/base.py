@@ -1,15 +1,17 @@
-"""Flows as time-dependent linear combinations of gridded basis fields.
+r"""Flows as time-dependent linear combinations of gridded basis fields.
 
 Every flow in swimrl has the form
 
-``q(x, t) = sum_{m=1..M} c_m(t) Q_m(x)``
+$$
+q(\boldsymbol x, t) = \sum_{m=1}^{M} c_m(t)\,Q_m(\boldsymbol x)
+$$
 
-where ``q = (u_x, u_y, S_xx, S_xy, omega)`` are the five channels the swimmer needs and
-``Q_m`` are node values on a periodic grid. The stochastic flow (paper Sec. II B) has ``M``
-stream-function components with Ornstein-Uhlenbeck ``c_m``; a stored DNS run has two
-snapshots with linear-in-time weights ``(1 - a, a)``. Sampling interpolates the ``M * 5``
+where $q = (u_x, u_y, S_{xx}, S_{xy}, \omega)$ are the five channels the swimmer needs and
+$Q_m$ are node values on a periodic grid. The stochastic flow (paper Sec. II B) has $M$
+stream-function components with Ornstein-Uhlenbeck $c_m$; a stored DNS run has two
+snapshots with linear-in-time weights $(1 - a, a)$. Sampling interpolates the $5M$
 channels at the points (bilinear, :mod:`swimrl.flows.interpolation`) and contracts with
-``c_m(t)``; the domain is periodically extended so swimmers move in the unbounded plane.
+$c_m(t)$; the domain is periodically extended so swimmers move in the unbounded plane.
 """
 
 from __future__ import annotations
@@ -25,18 +27,19 @@ N_CHANNELS = len(CHANNELS)
 
 
 def gradient_norm2(q: torch.Tensor) -> torch.Tensor:
-    """``A_ij A_ij`` with ``A_ij = d_j u_i`` from channels: ``2 S_xx^2 + 2 S_xy^2 + omega^2/2``.
+    r"""$A_{ij}A_{ij}$ with $A_{ij} = \partial_j u_i$ from channels:
+    $2S_{xx}^2 + 2S_{xy}^2 + \omega^2/2$.
 
-    (2D incompressible: ``d_x u_x = -d_y u_y = S_xx``, ``d_y u_x = S_xy - omega/2``,
-    ``d_x u_y = S_xy + omega/2``.)
+    (2D incompressible: $\partial_x u_x = -\partial_y u_y = S_{xx}$,
+    $\partial_y u_x = S_{xy} - \omega/2$, $\partial_x u_y = S_{xy} + \omega/2$.)
     """
     return 2 * q[..., 2] ** 2 + 2 * q[..., 3] ** 2 + 0.5 * q[..., 4] ** 2
 
 
 def field_stats(q: torch.Tensor, weights: torch.Tensor | None = None) -> dict[str, float]:
-    """``u_rms = <u.u>^{1/2}`` and ``tau_K = <A_ij A_ij>^{-1/2}`` of node values ``q``
-    ``(R, n, n, 5)``: the mean over all nodes, or with ``weights`` ``(R,)`` the weighted mean
-    of the per-row means."""
+    r"""$u_\mathrm{rms} = \langle\boldsymbol u\cdot\boldsymbol u\rangle^{1/2}$ and
+    $\tau_K = \langle A_{ij}A_{ij}\rangle^{-1/2}$ of node values ``q`` ``(R, n, n, 5)``: the
+    mean over all nodes, or with ``weights`` ``(R,)`` the weighted mean of the per-row means."""
     u2, a2 = q[..., 0] ** 2 + q[..., 1] ** 2, gradient_norm2(q)
     if weights is None:
         return {"u_rms": u2.mean().item() ** 0.5, "tau_K": a2.mean().item() ** -0.5}
@@ -46,19 +49,21 @@ def field_stats(q: torch.Tensor, weights: torch.Tensor | None = None) -> dict[st
 
 
 def max_speed(q: torch.Tensor) -> torch.Tensor:
-    """``max_x |u(x)| = max_j (u_x^2 + u_y^2)^{1/2}`` over the nodes of channels ``q``
+    r"""$\max_{\boldsymbol x}|\boldsymbol u(\boldsymbol x)| = \max_j (u_x^2 + u_y^2)^{1/2}$ over
+    the nodes of channels ``q``
     ``(..., n, n, M, 5)``: ``(..., M)``, one value per basis field."""
     return (q[..., 0] ** 2 + q[..., 1] ** 2).amax(dim=(-3, -2)).sqrt()
 
 
 class GriddedFlow:
-    """Base class: ``n_flows`` independent realisations of ``q(x,t) = sum_m c_m(t) Q_m(x)``.
+    r"""Base class: ``n_flows`` independent realisations of
+    $q(\boldsymbol x, t) = \sum_m c_m(t)\,Q_m(\boldsymbol x)$.
 
     Subclasses fill :attr:`basis` (``(R, n, n, M, 5)``, float) and :attr:`coeffs`
     (``(R, M)``) and implement :meth:`advance` and :meth:`reset`. A basis row is one
     realisation; several flows may share a row (a replay in which they replay the same run
     from the same time): :meth:`rows` maps flows to rows (the identity by default,
-    ``R = F``). ``u_rms`` and ``tau_k`` are the flow's reference scales (ensemble values) in
+    $R = F$). ``u_rms`` and ``tau_k`` are the flow's reference scales (ensemble values) in
     its own units. A new flow is a subclass (``docs/extending.md``).
 
     Parameters
@@ -66,13 +71,13 @@ class GriddedFlow:
     grid
         The periodic node grid of the basis fields.
     n_flows
-        ``F``, the realisations.
+        $F$, the realisations.
     n_basis
-        ``M``, the basis fields per realisation.
+        $M$, the basis fields per realisation.
     device, dtype
         Where and in which precision the basis is kept.
     n_rows
-        ``R``, the basis rows (default ``F``).
+        $R$, the basis rows (default $F$).
     """
 
     u_rms: float = 1.0
@@ -80,9 +85,10 @@ class GriddedFlow:
 
     @property
     def ell_f(self) -> float:
-        """The flow length ``ell_f`` (units of targets, :mod:`swimrl.task`): ``2 u_rms tau_K``,
-        the stochastic flow's relation ``tau_K = ell_f / (2 u_rms)``, which a flow with its own
-        correlation length (:class:`~swimrl.flows.stochastic.StochasticFlow`) overrides."""
+        r"""The flow length $\ell_f$ (units of targets, :mod:`swimrl.task`):
+        $2u_\mathrm{rms}\tau_K$, the stochastic flow's relation
+        $\tau_K = \ell_f/(2u_\mathrm{rms})$, which a flow with its own correlation length
+        (:class:`~swimrl.flows.stochastic.StochasticFlow`) overrides."""
         return 2.0 * self.u_rms * self.tau_k
 
     def __init__(self, grid: PeriodicGrid, n_flows: int, n_basis: int, device, dtype,
@@ -103,7 +109,7 @@ class GriddedFlow:
 
     # -- interface for subclasses -------------------------------------------------------------
     def advance(self, dt: float) -> None:  # pragma: no cover - abstract
-        """Advance the coefficients (and, where needed, the basis) from ``t`` to ``t + dt``."""
+        r"""Advance the coefficients (and, where needed, the basis) from $t$ to $t + \delta t$."""
         raise NotImplementedError
 
     def reset(self, flows: torch.Tensor | None = None) -> None:  # pragma: no cover - abstract
@@ -116,10 +122,10 @@ class GriddedFlow:
         return flow_index
 
     def coefficient_path(self, n_steps: int, dt: float) -> torch.Tensor:
-        """Coefficients of the basis rows at ``t, t + dt, ..., t + n_steps dt``:
-        ``(n_steps + 1, R, M)``.
+        r"""Coefficients of the basis rows at $t, t + \delta t, \dots, t + N\delta t$
+        ($N$ = ``n_steps``): ``(n_steps + 1, R, M)``.
 
-        Advances the flow to ``t + n_steps dt`` (as ``n_steps`` calls of :meth:`advance`).
+        Advances the flow to $t + N\delta t$ (as ``n_steps`` calls of :meth:`advance`).
         """
         path = [self.coeffs.clone()]
         for _ in range(n_steps):
@@ -134,10 +140,13 @@ class GriddedFlow:
             self.mode_speed[r] = max_speed(self.basis[r])
 
     def speed_bound(self, path: torch.Tensor) -> torch.Tensor:
-        """Upper bound of the flow speed over the times of a coefficient ``path``
+        r"""Upper bound of the flow speed over the times of a coefficient ``path``
         ``(K, R, M)``, per basis row ``(R,)``:
 
-        ``max_{x,k} |u(x, t_k)| <= max_k sum_m |c_m(t_k)| max_x |Q_m(x)|``,
+        $$
+        \max_{\boldsymbol x, k}|\boldsymbol u(\boldsymbol x, t_k)|
+        \le \max_k \sum_m |c_m(t_k)|\,\max_{\boldsymbol x}|Q_m(\boldsymbol x)|,
+        $$
 
         exact for the sampled flow too, since bilinear interpolation is a convex combination
         of node values.
@@ -153,18 +162,19 @@ class GriddedFlow:
     def sample(
         self, flow_index: torch.Tensor, pos: torch.Tensor, coeffs: torch.Tensor | None = None
     ) -> torch.Tensor:
-        """Channels ``q(x, t)``, ``(P, 5)``, at ``pos`` ``(P, 2)`` in flows ``flow_index``.
+        r"""Channels $q(\boldsymbol x, t)$, ``(P, 5)``, at ``pos`` ``(P, 2)`` in flows
+        ``flow_index``.
 
-        ``q = sum_m c_m(t) I[Q_m](x)`` with ``I`` the bilinear periodic interpolant and
-        ``c`` the current coefficients of the basis rows (or ``coeffs``, ``(R, M)``).
+        $q = \sum_m c_m(t)\,I[Q_m](\boldsymbol x)$ with $I$ the bilinear periodic interpolant
+        and $c$ the current coefficients of the basis rows (or ``coeffs``, ``(R, M)``).
         """
         c = self.coeffs if coeffs is None else coeffs
         rows = self.rows(flow_index)
         return sample_basis(self.table, self.grid.n, self.grid.spacing, rows, c, pos)
 
     def grid_fields(self, flows: torch.Tensor | None = None, stride: int = 1) -> torch.Tensor:
-        """Current node values ``q_j(t) = sum_m c_m(t) Q_m(x_j)`` of ``flows`` (all if None)
-        on every ``stride``-th node: ``(len(flows), n/stride, n/stride, 5)``."""
+        r"""Current node values $q_j(t) = \sum_m c_m(t)\,Q_m(\boldsymbol x_j)$ of ``flows`` (all if
+        None) on every ``stride``-th node: ``(len(flows), n/stride, n/stride, 5)``."""
         if flows is None:
             flows = torch.arange(self.n_flows, device=self.device)
         r = self.rows(torch.as_tensor(flows, device=self.device).reshape(-1))
@@ -172,7 +182,9 @@ class GriddedFlow:
         return torch.einsum("fm,fyxmc->fyxc", self.coeffs[r], basis)
 
     def measured_stats(self) -> dict[str, float]:
-        """Grid averages over all flows: ``u_rms = <u.u>^{1/2}``, ``tau_K = <A_ij A_ij>^{-1/2}``."""
+        r"""Grid averages over all flows:
+        $u_\mathrm{rms} = \langle\boldsymbol u\cdot\boldsymbol u\rangle^{1/2}$,
+        $\tau_K = \langle A_{ij}A_{ij}\rangle^{-1/2}$."""
         return field_stats(self.grid_fields().double())
 
 
@@ -184,7 +196,8 @@ def sample_basis(
     coeffs: torch.Tensor,
     pos: torch.Tensor,
 ) -> torch.Tensor:
-    """``q(x) = sum_m c_m I[Q_m](x)`` from a ``(F n n, M 5)`` table; returns ``(P, 5)``."""
+    r"""$q(\boldsymbol x) = \sum_m c_m\,I[Q_m](\boldsymbol x)$ from a ``(F n n, M 5)`` table;
+    returns ``(P, 5)``."""
     m = coeffs.shape[-1]
     rows = bilinear_periodic(table, n, flow_index, pos, spacing)
     if m == 1:

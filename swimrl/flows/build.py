@@ -4,8 +4,9 @@ realisations of any registered flow.
 
 Each spec checks its values on construction (one :class:`~swimrl.errors.ConfigError` naming
 the ``flow.*`` key). Replayed flows (a stored run, or a DNS stepped alongside) are
-interpolated in time over decision intervals ``T_u`` and episodes ``T`` given in units of
-the run's own ``tau_K``; the stochastic flow has ``tau_K = 0.5`` in units ``ell_f = u_rms = 1``.
+interpolated in time over decision intervals $T_u$ and episodes $T$ given in units of
+the run's own $\tau_K$; the stochastic flow has $\tau_K = 0.5$ in units
+$\ell_f = u_\mathrm{rms} = 1$.
 """
 
 from __future__ import annotations
@@ -43,7 +44,7 @@ from swimrl.flows.stochastic import (
 
 @dataclass(frozen=True)
 class StochasticSpec:
-    """``flow=stochastic``: the paper's flow at Kubo number ``kubo`` (Sec. II B).
+    r"""``flow=stochastic``: the paper's flow at Kubo number ``kubo`` (Sec. II B).
 
     ``basis``, ``basis_seed``, ``amplitudes``, ``velocity_scale``: readings of the paper's
     text, defaults as written (:mod:`swimrl.flows.stochastic`). The defaults (for library
@@ -52,21 +53,22 @@ class StochasticSpec:
     Parameters
     ----------
     kubo
-        ``Ku = tau_f u_rms / ell_f`` (the paper: 0.1, 1, 10, 1e7).
+        $\mathrm{Ku} = \tau_f u_\mathrm{rms}/\ell_f$ (the paper: 0.1, 1, 10, 1e7).
     n_modes
-        ``M``, the stream-function components (the paper: 5).
+        $M$, the stream-function components (the paper: 5).
     n_grid
         Grid nodes per side (the paper: 400).
     spacing
-        Grid spacing in units of ``ell_f`` (the paper: 0.025; box ``n_grid * spacing``).
+        Grid spacing in units of $\ell_f$ (the paper: 0.025; box ``n_grid * spacing``).
     basis
         ``redrawn`` (new components per flow) or ``fixed`` (one set, from ``basis_seed``).
     basis_seed
         The seed of the fixed components.
     amplitudes
-        ``stationary`` (``c_i(0) ~ N(0, 1/M)``) or ``normalised`` (on the unit sphere).
+        ``stationary`` ($c_i(0)\sim\mathcal N(0, 1/M)$) or ``normalised`` (on the unit sphere).
     velocity_scale
-        ``total`` (``v_s`` and Ku against ``<u.u>^{1/2}``) or ``component``.
+        ``total`` ($v_s$ and Ku against $\langle\boldsymbol u\cdot\boldsymbol u\rangle^{1/2}$) or
+        ``component``.
     name
         The config group's name.
     """
@@ -147,17 +149,17 @@ class StoredRunSpec:
 
 @dataclass(frozen=True)
 class LiveDNSSpec:
-    """``flow=dns``: one DNS realisation per flow, spun up, then stepped with the swimmers.
+    r"""``flow=dns``: one DNS realisation per flow, spun up, then stepped with the swimmers.
 
     Parameters
     ----------
     dns
         The solver's parameters (``conf/solver/dns.yaml``).
     spinup_time, measure_time
-        The spin-up from rest and its final part over which ``u_rms`` and ``tau_K`` are
+        The spin-up from rest and its final part over which $u_\mathrm{rms}$ and $\tau_K$ are
         measured (code time units).
     interval_tau_k
-        The interval between the snapshots the swimmers see, in units of ``tau_K``.
+        The interval between the snapshots the swimmers see, in units of $\tau_K$.
     name
         The config group's name.
     """
@@ -206,8 +208,8 @@ FLOW_WORK_BYTES = 2**29
 
 
 def flow_table_bytes(spec, n_flows: int, dtype: torch.dtype, interval: float) -> int:
-    """Bytes ``n_flows`` realisations of ``spec`` hold (the flow entry's ``table_bytes``;
-    0 for a flow that declares none); ``interval`` is ``T_u`` in units of ``tau_K``."""
+    r"""Bytes ``n_flows`` realisations of ``spec`` hold (the flow entry's ``table_bytes``;
+    0 for a flow that declares none); ``interval`` is $T_u$ in units of $\tau_K$."""
     entry = flow_entry(spec.name)
     return 0 if entry.table_bytes is None else entry.table_bytes(spec, n_flows, dtype, interval)
 
@@ -248,7 +250,7 @@ def build_flow(
     interval: float,
     duration: float,
 ):
-    """``n_flows`` realisations of ``spec``, by its registered builder
+    r"""``n_flows`` realisations of ``spec``, by its registered builder
     (:mod:`swimrl.flows.registry`).
 
     Parameters
@@ -263,7 +265,7 @@ def build_flow(
     generator
         The random generator of the realisations.
     interval, duration
-        ``T_u`` and ``T`` in units of ``tau_K`` (used by the replayed flows).
+        $T_u$ and $T$ in units of $\tau_K$ (used by the replayed flows).
 
     Returns
     -------

@@ -1,8 +1,8 @@
-"""Doubly periodic square grid and spectral derivatives.
+r"""Doubly periodic square grid and spectral derivatives.
 
-Nodes sit at ``x_j = j h``, ``j = 0..N-1``, with ``h = L/N``. Wavenumbers are
-``k = 2 pi m / L`` with ``m`` in FFT order. Derivatives are exact for band-limited
-fields: ``d_x f = IFFT(i k_x FFT(f))``.
+Nodes sit at $x_j = jh$, $j = 0, \dots, N-1$, with $h = L/N$. Wavenumbers are
+$k = 2\pi m/L$ with $m$ in FFT order. Derivatives are exact for band-limited
+fields: $\partial_x f = \mathrm{IFFT}(ik_x\,\mathrm{FFT}(f))$.
 """
 
 from __future__ import annotations
@@ -28,19 +28,19 @@ class PeriodicGrid:
 
     @property
     def spacing(self) -> float:
-        """Grid spacing ``h = L / N``."""
+        """Grid spacing $h = L/N$."""
         return self.length / self.n
 
     def coords(self, device: torch.device | str = "cpu", dtype=torch.float64) -> torch.Tensor:
-        """Node coordinates ``x_j = j h`` (1D, length ``n``)."""
+        """Node coordinates $x_j = jh$ (1D, length ``n``)."""
         return torch.arange(self.n, device=device, dtype=dtype) * self.spacing
 
     def wavenumbers(
         self, device: torch.device | str = "cpu", dtype=torch.float64
     ) -> tuple[torch.Tensor, torch.Tensor]:
-        """Full-FFT wavenumber grids ``(k_x, k_y)`` of shape ``(n, n)``, indexed ``[iy, ix]``.
+        r"""Full-FFT wavenumber grids $(k_x, k_y)$ of shape ``(n, n)``, indexed ``[iy, ix]``.
 
-        ``k = 2 pi m / L`` with ``m = fftfreq(n) * n``. The Nyquist mode ``m = -n/2`` is
+        $k = 2\pi m/L$ with ``m = fftfreq(n) * n``. The Nyquist mode $m = -n/2$ is
         kept as is; fields generated here have negligible power there.
         """
         k = torch.fft.fftfreq(self.n, d=self.spacing, device=device, dtype=dtype) * (2 * math.pi)

@@ -1,13 +1,18 @@
-"""Second-order (bilinear) interpolation on a periodic grid, batched over flows.
+r"""Second-order (bilinear) interpolation on a periodic grid, batched over flows.
 
-For a node-sampled field ``f_{j,i} = f(i h, j h)`` and a point ``(x, y)`` with
-``s_x = x/h = i_0 + a``, ``s_y = y/h = j_0 + b`` (``0 <= a, b < 1``):
+For a node-sampled field $f_{j,i} = f(ih, jh)$ and a point $(x, y)$ with
+$s_x = x/h = i_0 + a$, $s_y = y/h = j_0 + b$ ($0 \le a, b < 1$):
 
-``f(x, y) ~ (1-a)(1-b) f_{j0,i0} + a(1-b) f_{j0,i0+1} + (1-a) b f_{j0+1,i0} + a b f_{j0+1,i0+1}``
+$$
+\begin{aligned}
+f(x, y) \approx{}& (1-a)(1-b)\,f_{j_0,i_0} + a(1-b)\,f_{j_0,i_0+1}\\
+&+ (1-a)\,b\,f_{j_0+1,i_0} + ab\,f_{j_0+1,i_0+1}
+\end{aligned}
+$$
 
-indices taken modulo ``N`` (periodic extension). The scheme is exact for bilinear
-functions; for smooth ``f`` the error is bounded by
-``|err| <= (h^2/8) (max|f_xx| + max|f_yy|)`` (second order in ``h``).
+indices taken modulo $N$ (periodic extension). The scheme is exact for bilinear
+functions; for smooth $f$ the error is bounded by
+$|\mathrm{err}| \le (h^2/8)\,(\max|f_{xx}| + \max|f_{yy}|)$ (second order in $h$).
 """
 
 from __future__ import annotations
@@ -25,7 +30,7 @@ def bilinear_periodic(
         n: grid points per side.
         flow_index: ``(P,)`` int64, flow of each point.
         pos: ``(P, 2)`` positions ``(x, y)``; any real value (wrapped periodically).
-        spacing: grid spacing ``h``.
+        spacing: grid spacing $h$.
 
     Returns:
         ``(P, C)`` interpolated values.

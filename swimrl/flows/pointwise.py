@@ -1,15 +1,15 @@
 r"""Flows evaluated at the swimmers' positions, without a grid, in 2D or 3D.
 
-A :class:`PointFlow` gives, for ``F`` flow realisations and ``S`` points in each,
-
-``u_i(x, t)``  ``(F, S, d)``  and  ``A_ij(x, t) = d_j u_i(x, t)``  ``(F, S, d, d)``,
-
+A :class:`PointFlow` gives, for $F$ flow realisations and $S$ points in each,
+$u_i(\boldsymbol x, t)$ ``(F, S, d)`` and
+$A_{ij}(\boldsymbol x, t) = \partial_j u_i(\boldsymbol x, t)$ ``(F, S, d, d)``,
 both analytic (no interpolation): the analytic flows of :mod:`swimrl.flows.analytic` and
 the random-Fourier-mode 3D stochastic flow of :mod:`swimrl.flows.stochastic3d`. Each flow
-keeps its own time ``t`` (``(F,)``, float64) and its reference scales ``u_rms`` (the total
-rms ``<u.u>^{1/2}``, ``None`` where the flow has none) and ``tau_k = <A_ij A_ij>^{-1/2}``,
-the conventions of the 2D flows (:mod:`swimrl.flows.stochastic`). The 2D swimmer's five
-channels follow from ``(u, A)`` by :func:`channels_2d`.
+keeps its own time $t$ (``(F,)``, float64) and its reference scales ``u_rms`` (the total
+rms $\langle\boldsymbol u\cdot\boldsymbol u\rangle^{1/2}$, ``None`` where the flow has none)
+and ``tau_k`` $= \langle A_{ij}A_{ij}\rangle^{-1/2}$, the conventions of the 2D flows
+(:mod:`swimrl.flows.stochastic`). The 2D swimmer's five channels follow from
+$(\boldsymbol u, \mathbb A)$ by :func:`channels_2d`.
 """
 
 from __future__ import annotations
@@ -20,18 +20,19 @@ import torch
 
 
 def channels_2d(u: torch.Tensor, grad: torch.Tensor) -> torch.Tensor:
-    """The five 2D channels ``(u_x, u_y, S_xx, S_xy, omega)`` of :data:`swimrl.flows.base.CHANNELS`
-    from ``u`` ``(..., 2)`` and ``A_ij = d_j u_i`` ``(..., 2, 2)``:
-    ``S_xx = A_xx``, ``S_xy = (A_xy + A_yx)/2``, ``omega = A_yx - A_xy``
-    (incompressible: ``S_yy = A_yy = -S_xx``)."""
+    r"""The five 2D channels $(u_x, u_y, S_{xx}, S_{xy}, \omega)$ of
+    :data:`swimrl.flows.base.CHANNELS` from ``u`` ``(..., 2)`` and
+    $A_{ij} = \partial_j u_i$ ``(..., 2, 2)``:
+    $S_{xx} = A_{xx}$, $S_{xy} = (A_{xy} + A_{yx})/2$, $\omega = A_{yx} - A_{xy}$
+    (incompressible: $S_{yy} = A_{yy} = -S_{xx}$)."""
     return torch.stack((u[..., 0], u[..., 1], grad[..., 0, 0],
                         0.5 * (grad[..., 0, 1] + grad[..., 1, 0]),
                         grad[..., 1, 0] - grad[..., 0, 1]), -1)
 
 
 def vorticity(grad: torch.Tensor) -> torch.Tensor:
-    """``omega_i = eps_ijk d_j u_k`` of a 3D gradient ``A_ij = d_j u_i`` ``(..., 3, 3)``:
-    ``(A_zy - A_yz, A_xz - A_zx, A_yx - A_xy)``."""
+    r"""$\omega_i = \epsilon_{ijk}\,\partial_j u_k$ of a 3D gradient $A_{ij} = \partial_j u_i$
+    ``(..., 3, 3)``: $(A_{zy} - A_{yz}, A_{xz} - A_{zx}, A_{yx} - A_{xy})$."""
     return torch.stack((grad[..., 2, 1] - grad[..., 1, 2], grad[..., 0, 2] - grad[..., 2, 0],
                         grad[..., 1, 0] - grad[..., 0, 1]), -1)
 
@@ -46,7 +47,7 @@ class PointFlow:
     Parameters
     ----------
     n_flows
-        ``F``, the realisations.
+        $F$, the realisations.
     device, dtype
         Where and in which precision the fields are evaluated (times are float64).
     """
@@ -73,8 +74,9 @@ class PointFlow:
     # -- interface for subclasses -------------------------------------------------------------
     def sample(self, pos: torch.Tensor, flows: torch.Tensor | None = None
                ) -> tuple[torch.Tensor, torch.Tensor]:  # pragma: no cover - abstract
-        """``(u, A)`` at ``pos`` ``(F', S, d)`` in the flows ``flows`` (indices ``(F',)``,
-        all flows if None): ``u`` ``(F', S, d)``, ``A_ij = d_j u_i`` ``(F', S, d, d)``."""
+        r"""$(\boldsymbol u, \mathbb A)$ at ``pos`` ``(F', S, d)`` in the flows ``flows`` (indices
+        ``(F',)``, all flows if None): $\boldsymbol u$ ``(F', S, d)``,
+        $A_{ij} = \partial_j u_i$ ``(F', S, d, d)``."""
         raise NotImplementedError
 
     def compile_sampler(self) -> None:
@@ -82,7 +84,7 @@ class PointFlow:
         analytic flows have none and stay eager)."""
 
     def advance(self, dt: float) -> None:
-        """Move every flow from ``t`` to ``t + dt``."""
+        r"""Move every flow from $t$ to $t + \delta t$."""
         self.time += dt
 
     def reset(self, flows: torch.Tensor | None = None) -> None:
@@ -95,12 +97,14 @@ class PointFlow:
 
     # -- shared -------------------------------------------------------------------------------
     def velocity(self, pos: torch.Tensor, flows: torch.Tensor | None = None) -> torch.Tensor:
-        """``u(x, t)`` ``(F', S, d)`` at ``pos`` ``(F', S, d)`` (see :meth:`sample`)."""
+        r"""$\boldsymbol u(\boldsymbol x, t)$ ``(F', S, d)`` at ``pos`` ``(F', S, d)`` (see
+        :meth:`sample`)."""
         return self.sample(pos, flows)[0]
 
     def velocity_gradient(self, pos: torch.Tensor, flows: torch.Tensor | None = None
                           ) -> torch.Tensor:
-        """``A_ij = d_j u_i`` ``(F', S, d, d)`` at ``pos`` ``(F', S, d)`` (see :meth:`sample`)."""
+        r"""$A_{ij} = \partial_j u_i$ ``(F', S, d, d)`` at ``pos`` ``(F', S, d)`` (see
+        :meth:`sample`)."""
         return self.sample(pos, flows)[1]
 
     def flow_index(self, pos: torch.Tensor, flows: torch.Tensor | None) -> torch.Tensor:
@@ -114,8 +118,9 @@ class PointFlow:
         return flows
 
     def speed_bound(self) -> torch.Tensor | None:
-        """An upper bound of ``max_x |u(x, t)|`` of each flow now, ``(F,)``; None where the
-        flow has none (a linear flow: ``|u|`` grows with ``|x|``)."""
+        r"""An upper bound of $\max_{\boldsymbol x}|\boldsymbol u(\boldsymbol x, t)|$ of each flow
+        now, ``(F,)``; None where the flow has none (a linear flow: $|\boldsymbol u|$ grows with
+        $|\boldsymbol x|$)."""
         return None
 
     def measured_stats(self) -> dict[str, float]:

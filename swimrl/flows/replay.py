@@ -1,29 +1,33 @@
 r"""Replay of stored flow snapshots (e.g. DNS runs) as a flow for the swimmer environment.
 
-Snapshots ``Q_j(x)`` (five channels on a periodic grid) of a run are stored at times
-``j Δ``. Between them the flow is linear in time:
+Snapshots $Q_j(\boldsymbol x)$ (five channels on a periodic grid) of a run are stored at
+times $j\Delta$. Between them the flow is linear in time:
 
-``q(x, t) = (1 - a) Q_j(x) + a Q_{j+1}(x)``,  ``t = (j + a) Δ``,  ``0 <= a < 1``,
+$$
+q(\boldsymbol x, t) = (1 - a)\,Q_j(\boldsymbol x) + a\,Q_{j+1}(\boldsymbol x),\qquad
+t = (j + a)\,\Delta,\qquad 0 \le a < 1,
+$$
 
-which is the :class:`GriddedFlow` form ``sum_m c_m(t) Q_m`` over a window of ``M``
-consecutive snapshots with hat-function weights ``c_m(t) = max(0, 1 - |s - j_m|)``,
-``s = j_0 + t/Δ`` (``j_0`` the episode's start index, ``j_m`` the snapshot held in slot
-``m``). The window covers a whole decision interval (``M = T_u/Δ + 1`` snapshots when
-``T_u`` is a multiple of ``Δ``, else ``ceil(T_u/Δ) + 2``) and is a ring: snapshot ``j`` sits
-in slot ``j mod M``, so sliding the window writes only the snapshots new to it.
+which is the :class:`GriddedFlow` form $\sum_m c_m(t)\,Q_m$ over a window of $M$
+consecutive snapshots with hat-function weights $c_m(t) = \max(0, 1 - |s - j_m|)$,
+$s = j_0 + t/\Delta$ ($j_0$ the episode's start index, $j_m$ the snapshot held in slot
+$m$). The window covers a whole decision interval ($M = T_u/\Delta + 1$ snapshots when
+$T_u$ is a multiple of $\Delta$, else $\lceil T_u/\Delta\rceil + 2$) and is a ring: snapshot
+$j$ sits in slot $j \bmod M$, so sliding the window writes only the snapshots new to it.
 
 Decoding a snapshot (reading it and transforming it to node values) costs far more than
 moving swimmers through it, so it is done once for all the swimmers that need it:
 
 * flows that replay the same run from the same start time share one basis row
   (:meth:`GriddedFlow.rows`); ``flows_per_start`` consecutive flows of a reset draw one
-  (run, start) together, so ``F`` flows need ``F / flows_per_start`` decodes per new
-  snapshot instead of ``F``;
+  (run, start) together, so $F$ flows need $F$ / ``flows_per_start`` decodes per new
+  snapshot instead of $F$;
 * decoded snapshots are kept in a small least-recently-used cache keyed by (run, index), so
   rows that need the same snapshot at the same time decode it once.
 
-A reset draws, per group of flows, a run ``r ~ U{0..n_runs-1}`` (only when the source holds
-several) and a start index ``j_0 ~ U{0..n_times - needed}``; the swimmers' random start
+A reset draws, per group of flows, a run $r\sim U\{0, \dots, n_\mathrm{runs} - 1\}$ (only
+when the source holds several) and a start index
+$j_0\sim U\{0, \dots, n_\mathrm{times} - n_\mathrm{needed}\}$; the swimmers' random start
 positions supply the random place. A source that produces snapshots on demand
 (``n_times = None``, a DNS stepped alongside) has one realisation per flow and starts each
 episode at its newest snapshot.
@@ -64,7 +68,7 @@ class SnapshotSource(Protocol):
 
 
 def window_size(interval: float, delta: float) -> int:
-    """Snapshots ``M`` a window needs to cover one decision interval ``T_u`` (``Δ`` apart)."""
+    r"""Snapshots $M$ a window needs to cover one decision interval $T_u$ ($\Delta$ apart)."""
     ratio = interval / delta
     if abs(ratio - round(ratio)) < 1e-6 and round(ratio) >= 1:
         return round(ratio) + 1  # intervals start on stored times: no extra snapshot
@@ -86,7 +90,7 @@ class ReplayFlow(GriddedFlow):
         flows_per_start: int = 1,
         cache_size: int | None = None,
     ):
-        """``interval``: decision interval ``T_u`` and ``episode_time``: ``T``, in flow units."""
+        """``interval``: decision interval $T_u$ and ``episode_time``: $T$, in flow units."""
         self.source = source
         self.delta = float(source.dt_store)
         window = window_size(interval, self.delta)
@@ -124,8 +128,9 @@ class ReplayFlow(GriddedFlow):
 
     # -- episodes -----------------------------------------------------------------------------
     def start_indices(self, count: int) -> torch.Tensor:
-        """Stored index of ``t = 0`` for ``count`` new episodes: ``j ~ U{0..max_start}`` (a run
-        producing snapshots on demand: its newest one)."""
+        r"""Stored index of $t = 0$ for ``count`` new episodes:
+        $j\sim U\{0, \dots, m\}$, $m$ = ``max_start`` (a run producing snapshots on demand: its
+        newest one)."""
         if self.max_start is None:
             return torch.full((count,), self.source.latest, dtype=torch.int64)
         return torch.randint(
@@ -139,11 +144,12 @@ class ReplayFlow(GriddedFlow):
 
     @property
     def start(self) -> torch.Tensor:
-        """Stored index of each flow's ``t = 0``, ``(F,)``."""
+        """Stored index of each flow's $t = 0$, ``(F,)``."""
         return self.row_start[self.row]
 
     def start_runs(self, count: int) -> torch.Tensor:
-        """Run replayed by ``count`` new episodes: ``r ~ U{0..n_runs-1}`` (no draw for one run)."""
+        r"""Run replayed by ``count`` new episodes: $r\sim U\{0, \dots, n_\mathrm{runs} - 1\}$ (no
+        draw for one run)."""
         if self.source.n_runs == 1:
             return torch.zeros(count, dtype=torch.int64)
         return torch.randint(0, self.source.n_runs, (count,), generator=self.generator,
@@ -234,8 +240,8 @@ class ReplayFlow(GriddedFlow):
 
     # -- time ---------------------------------------------------------------------------------
     def coefficient_path(self, n_steps: int, dt: float) -> torch.Tensor:
-        """Weights of every basis row at ``t + k dt`` (``k = 0..n_steps``), ``(K+1, R, M)``,
-        over windows covering the interval."""
+        r"""Weights of every basis row at $t + k\,\delta t$ ($k = 0, \dots,$ ``n_steps``),
+        ``(K+1, R, M)``, over windows covering the interval."""
         rows = torch.unique(self.row[self.row >= 0])
         t0 = self.row_time[rows]
         s0 = self.row_start[rows].double() + t0 / self.delta
@@ -254,8 +260,9 @@ class ReplayFlow(GriddedFlow):
         return path
 
     def measured_stats(self) -> dict[str, float]:
-        """Grid averages over all flows (each row weighted by the flows that share it):
-        ``u_rms = <u.u>^{1/2}``, ``tau_K = <A_ij A_ij>^{-1/2}``."""
+        r"""Grid averages over all flows (each row weighted by the flows that share it):
+        $u_\mathrm{rms} = \langle\boldsymbol u\cdot\boldsymbol u\rangle^{1/2}$,
+        $\tau_K = \langle A_{ij}A_{ij}\rangle^{-1/2}$."""
         rows, count = torch.unique(self.row[self.row >= 0], return_counts=True)
         rows = rows.to(self.device)
         q = torch.einsum("fm,fyxmc->fyxc", self.coeffs[rows], self.basis[rows])

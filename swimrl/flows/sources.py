@@ -1,29 +1,30 @@
 r"""Snapshot sources of the replay flow: a stored DNS run and a DNS running alongside.
 
 All implement :class:`swimrl.flows.replay.SnapshotSource`: ``n_runs`` realisations of
-snapshots ``Q_j`` (five channels on the nodes) ``Δ = dt_store`` apart,
+snapshots $Q_j$ (five channels on the nodes) $\Delta$ = ``dt_store`` apart,
 ``channels(i0, i1, run)``, and the reference scales ``u_rms``, ``tau_k`` in which the
 swimmers' parameters are expressed.
 
 * :class:`DNSStore` reads a run written by ``swimrl-dns`` (``flow=dns_replay``); channels are
   reconstructed from the stored vorticity coefficients by spectral differentiation, on the
-  run's own grid or on a coarser decode grid of ``n_d`` nodes per side (``flow.decode_n``):
-  the retained modes ``|m_x|, |m_y| <= K`` with ``K <= n_d/2 - 1`` are kept exactly, so for
-  ``n_d > 2K`` the decoded nodes sample the same band-limited field, and only the bilinear
-  interpolation between nodes (error ``~ h^2``) differs; smaller ``n_d`` also truncates
-  ``K`` (docs/dns.md has the measured errors). Every read passes the chunks' crc32c checksums
+  run's own grid or on a coarser decode grid of $n_d$ nodes per side (``flow.decode_n``):
+  the retained modes $|m_x|, |m_y| \le K$ with $K \le n_d/2 - 1$ are kept exactly, so for
+  $n_d > 2K$ the decoded nodes sample the same band-limited field, and only the bilinear
+  interpolation between nodes (error $\sim h^2$) differs; smaller $n_d$ also truncates
+  $K$ (docs/dns.md has the measured errors). Every read passes the chunks' crc32c checksums
   and every snapshot read is finite with an rms velocity within a factor 5 of the run's
   ``u_rms`` (:mod:`swimrl.flows.dns.integrity`), else :class:`~swimrl.errors.IntegrityError`;
   a store written before checksums reads unverified, with one warning line.
 * :class:`StoreSet` is several stored runs (independent realisations, e.g. seeds) replayed
   as one source: ``channels(i0, i1, run)`` reads run ``run``.
 * :class:`LiveDNS` (``flow=dns``) is a batch of ``F`` independent DNS realisations, one per
-  flow, spun up from rest (:mod:`swimrl.flows.dns.spinup`: ``u_rms`` and ``tau_K`` are
+  flow, spun up from rest (:mod:`swimrl.flows.dns.spinup`: $u_\mathrm{rms}$ and $\tau_K$ are
   measured over the end of the spin-up). Afterwards the solver produces a snapshot every
-  ``s`` solver steps, ``Δ = s dt_DNS ~ interval_tau_k tau_K``, on demand, keeping a few in a
-  cache. Its ``n_times`` is ``None`` (unbounded): a new episode starts at the run's newest
-  snapshot, the realisation keeping on evolving (it is statistically stationary after the
-  spin-up). Nothing is written to disk. Best on a GPU (``device=cuda``).
+  $s$ solver steps, $\Delta = s\,\delta t_\mathrm{DNS} \approx$ ``interval_tau_k`` $\tau_K$,
+  on demand, keeping a few in a cache. Its ``n_times`` is ``None`` (unbounded): a new
+  episode starts at the run's newest snapshot, the realisation keeping on evolving (it is
+  statistically stationary after the spin-up). Nothing is written to disk. Best on a GPU
+  (``device=cuda``).
 """
 
 from __future__ import annotations
@@ -115,8 +116,8 @@ class DNSStore:
         return unpack(c.to(dtype) * float(self.store_n) ** 2, self.store_n)
 
     def decoded_hat(self, i0: int, i1: int) -> torch.Tensor:
-        """Unnormalised ``rfft2(omega)`` on the decode grid, ``(i1-i0, n_d, n_d//2+1)``:
-        the stored ``c_k`` with ``|m_x|, |m_y| <= cutoff``, times ``n_d^2``."""
+        r"""Unnormalised ``rfft2(omega)`` on the decode grid, ``(i1-i0, n_d, n_d//2+1)``:
+        the stored $c_k$ with $|m_x|, |m_y| \le$ ``cutoff``, times $n_d^2$."""
         c = self._stored(i0, i1)
         big, k = dealias_cutoff(self.store_n), self.cutoff
         c = c[:, big - k: big + k + 1, : k + 1]
@@ -141,7 +142,7 @@ class DNSStore:
         return {k: read(d[k], self.path, f"diagnostics/{k}", slice(0, n)) for k in names}
 
     def channels(self, i0: int, i1: int, run: int = 0) -> torch.Tensor:
-        """``(u_x, u_y, S_xx, S_xy, omega)`` at the decode nodes, ``(i1-i0, n_d, n_d, 5)``
+        r"""$(u_x, u_y, S_{xx}, S_{xy}, \omega)$ at the decode nodes, ``(i1-i0, n_d, n_d, 5)``
         float32 (a store is one run: ``run`` must be 0)."""
         if run != 0:
             raise IndexError(f"{self.path} holds one run; run {run} requested")
@@ -192,10 +193,10 @@ class StoreSet:
 
 
 class LiveDNS:
-    """Batched DNS producing channel snapshots ``(F, n, n, 5)`` on demand (a small cache).
+    r"""Batched DNS producing channel snapshots ``(F, n, n, 5)`` on demand (a small cache).
 
     ``spinup`` steps the run from rest to a steady state and measures its scales; snapshots
-    are then ``interval_tau_k tau_K`` apart (whole solver steps).
+    are then ``interval_tau_k`` $\tau_K$ apart (whole solver steps).
     """
 
     def __init__(

@@ -1,68 +1,87 @@
 r"""The 2D stochastic flow of the paper (Sec. II B, App. A), batched over realisations.
 
-Units: ``ell_f = u_rms = 1``. The stream function is
+Units: $\ell_f = u_\mathrm{rms} = 1$. The stream function is
 
-``psi(x, t) = sum_{i=1..M} c_i(t) psi_i(x)``,   ``u = (d_y psi, -d_x psi)``,
+$$
+\psi(\boldsymbol x, t) = \sum_{i=1}^{M} c_i(t)\,\psi_i(\boldsymbol x),\qquad
+\boldsymbol u = (\partial_y\psi, -\partial_x\psi),
+$$
 
 with independent Gaussian components of covariance
-``<psi_i(x) psi_j(x')> = delta_ij A exp(-|x - x'|^2 / 2)``, ``A = u_rms^2 ell_f^2 / 2``,
-and Ornstein-Uhlenbeck coefficients ``<c_i(t) c_j(t')> = delta_ij/M exp(-|t - t'|/tau_f)``,
-``tau_f = Ku ell_f / u_rms``.
+$\langle\psi_i(\boldsymbol x)\,\psi_j(\boldsymbol x')\rangle
+= \delta_{ij}\,A\exp(-|\boldsymbol x - \boldsymbol x'|^2/2)$,
+$A = u_\mathrm{rms}^2\ell_f^2/2$, and Ornstein-Uhlenbeck coefficients
+$\langle c_i(t)\,c_j(t')\rangle = \frac{\delta_{ij}}{M}\exp(-|t - t'|/\tau_f)$,
+$\tau_f = \mathrm{Ku}\,\ell_f/u_\mathrm{rms}$.
 
-Kolmogorov time of this model (derivation; ``C(r) = A exp(-r^2/2 ell^2)``). Moments of
-derivatives of a stationary Gaussian field follow from derivatives of ``C`` at ``r = 0``:
-``<psi_x^2> = -C_xx(0) = A/ell^2``, ``<psi_xx^2> = C_xxxx(0) = 3A/ell^4``,
-``<psi_xy^2> = <psi_xx psi_yy> = C_xxyy(0) = A/ell^4``. Hence, summing ``<c_i^2> = 1/M``
-over the ``M`` components,
+Kolmogorov time of this model (derivation; $C(r) = A\exp(-r^2/2\ell^2)$). Moments of
+derivatives of a stationary Gaussian field follow from derivatives of $C$ at $r = 0$:
+$\langle\psi_x^2\rangle = -C_{xx}(0) = A/\ell^2$,
+$\langle\psi_{xx}^2\rangle = C_{xxxx}(0) = 3A/\ell^4$,
+$\langle\psi_{xy}^2\rangle = \langle\psi_{xx}\psi_{yy}\rangle = C_{xxyy}(0) = A/\ell^4$.
+Hence, summing $\langle c_i^2\rangle = 1/M$ over the $M$ components,
 
-* ``<u.u> = <psi_x^2> + <psi_y^2> = 2A/ell^2 = u_rms^2`` (consistent normalisation);
-* ``<A_ij A_ij> = <psi_xx^2> + <psi_yy^2> + 2 <psi_xy^2> = 8A/ell^4 = 4 u_rms^2 / ell^2``;
+* $\langle\boldsymbol u\cdot\boldsymbol u\rangle = \langle\psi_x^2\rangle + \langle\psi_y^2\rangle
+  = 2A/\ell^2 = u_\mathrm{rms}^2$ (consistent normalisation);
+* $\langle A_{ij}A_{ij}\rangle = \langle\psi_{xx}^2\rangle + \langle\psi_{yy}^2\rangle +
+  2\langle\psi_{xy}^2\rangle = 8A/\ell^4 = 4u_\mathrm{rms}^2/\ell^2$;
 
-so ``tau_K = <A_ij A_ij>^{-1/2} = ell_f / (2 u_rms) = 0.5``. Component-wise,
-``<S_xx^2> = <S_xy^2> = u_rms^2/(2 ell^2)`` and ``<omega^2> = 4 u_rms^2/ell^2``.
+so $\tau_K = \langle A_{ij}A_{ij}\rangle^{-1/2} = \ell_f/(2u_\mathrm{rms}) = 0.5$.
+Component-wise, $\langle S_{xx}^2\rangle = \langle S_{xy}^2\rangle = u_\mathrm{rms}^2/(2\ell^2)$
+and $\langle\omega^2\rangle = 4u_\mathrm{rms}^2/\ell^2$.
 
-Generation (exact discrete covariance): with ``P_k`` the discrete spectrum of the
-periodically summed covariance (:func:`gaussian_spectrum`), a white field ``w`` gives
-``psi = IFFT(sqrt(P) FFT(w))``, whose covariance on the grid is the circular
-autocorrelation ``IFFT(P) = sum_n C(x - x' + n L)``; for ``L = 10 ell_f`` the periodic
-images change ``C`` by less than ``2 e^{-12.5} A`` anywhere.
-Derivatives are spectral: ``psi_x = IFFT(i k_x psi_hat)``.
+Generation (exact discrete covariance): with $P_k$ the discrete spectrum of the
+periodically summed covariance (:func:`gaussian_spectrum`), a white field $w$ gives
+$\psi = \mathrm{IFFT}(\sqrt P\,\mathrm{FFT}(w))$, whose covariance on the grid is the circular
+autocorrelation
+$\mathrm{IFFT}(P) = \sum_{\boldsymbol n} C(\boldsymbol x - \boldsymbol x' + \boldsymbol nL)$;
+for $L = 10\,\ell_f$ the periodic images change $C$ by less than $2e^{-12.5}A$ anywhere.
+Derivatives are spectral: $\psi_x = \mathrm{IFFT}(ik_x\hat\psi)$.
 
-Band limit (speed, same draws): ``sqrt(P_k)`` falls as ``exp(-k^2 ell^2 / 4)``, so only the
-modes ``|m_x|, |m_y| <= K`` carry the fields (:func:`band_limit`: every dropped mode has
-``sqrt(P_k) max(1, k^2 ell^2) <= 1e-13`` of the peak; ``K = 18`` of 200 at the default
-``L = 10``, ``n = 400``). :class:`BandLimitedSynthesis` evaluates the same
-``IFFT(m_k sqrt(P) FFT(w))`` as direct sums over those modes (dense float64 products, the
-last one in the flow's dtype, instead of full FFTs): the same white field ``w``, hence the
-same realisation, to round-off (float64 plus the dropped ``1e-13``; a few float32 ulps for
-float32 flows); several times faster at the default grid.
+Band limit (speed, same draws): $\sqrt{P_k}$ falls as $\exp(-k^2\ell^2/4)$, so only the
+modes $|m_x|, |m_y| \le K$ carry the fields (:func:`band_limit`: every dropped mode has
+$\sqrt{P_k}\,\max(1, k^2\ell^2) \le 10^{-13}$ of the peak; $K = 18$ of 200 at the default
+$L = 10$, $n = 400$). :class:`BandLimitedSynthesis` evaluates the same
+$\mathrm{IFFT}(m_k\sqrt P\,\mathrm{FFT}(w))$ as direct sums over those modes (dense float64
+products, the last one in the flow's dtype, instead of full FFTs): the same white field $w$,
+hence the same realisation, to round-off (float64 plus the dropped $10^{-13}$; a few float32
+ulps for float32 flows); several times faster at the default grid.
 
-OU update (exact for any step): ``c(t+dt) = c(t) e^{-dt/tau_f} + sqrt((1 - e^{-2 dt/tau_f})/M) xi``,
-``xi ~ N(0, 1)``; ``c(0)`` is drawn from the stationary law ``N(0, 1/M)``.
+OU update (exact for any step):
+
+$$
+c(t + \delta t) = c(t)\,e^{-\delta t/\tau_f}
++ \sqrt{\frac{1 - e^{-2\delta t/\tau_f}}{M}}\;\xi,\qquad \xi\sim\mathcal N(0, 1);
+$$
+
+$c(0)$ is drawn from the stationary law $\mathcal N(0, 1/M)$.
 
 Readings of the specification (options; the defaults are the paper's text as written,
 issue 11 item 6 evaluates the others at Ku = 1e7, ``docs/results.md``):
 
-* ``basis``: ``"redrawn"`` (default) draws new components ``psi_i`` with every realisation
+* ``basis``: ``"redrawn"`` (default) draws new components $\psi_i$ with every realisation
   (every flow of an evaluation, every episode of training); ``"fixed"`` draws one set of
-  ``M`` components from its own generator seeded with ``basis_seed`` and gives it to every
-  realisation, which then differ only by ``c_i`` (the paper's "at the start of each
-  episode, the flow coefficients ``c_i`` [...] are randomly sampled"). The ensemble is then
-  conditional on one draw of the ``psi_i``: ``<u.u>`` and ``tau_K`` hold on average over
-  ``basis_seed``, not for each.
-* ``amplitudes``: ``"stationary"`` (default) ``c(0) ~ N(0, 1/M)``; ``"normalised"``
-  ``c(0) = xi / |xi|`` with the same ``xi ~ N(0, 1)`` (uniform on the unit sphere), so
-  ``sum_i c_i(0)^2 = 1`` in every realisation while ``<c_i^2> = 1/M`` still holds: the
-  ensemble ``u_rms`` and ``tau_K`` are unchanged, only the realisation-to-realisation
+  $M$ components from its own generator seeded with ``basis_seed`` and gives it to every
+  realisation, which then differ only by $c_i$ (the paper's "at the start of each
+  episode, the flow coefficients $c_i$ [...] are randomly sampled"). The ensemble is then
+  conditional on one draw of the $\psi_i$: $\langle\boldsymbol u\cdot\boldsymbol u\rangle$ and
+  $\tau_K$ hold on average over ``basis_seed``, not for each.
+* ``amplitudes``: ``"stationary"`` (default) $c(0)\sim\mathcal N(0, 1/M)$; ``"normalised"``
+  $c(0) = \xi/|\xi|$ with the same $\xi\sim\mathcal N(0, 1)$ (uniform on the unit sphere), so
+  $\sum_i c_i(0)^2 = 1$ in every realisation while $\langle c_i^2\rangle = 1/M$ still holds:
+  the ensemble $u_\mathrm{rms}$ and $\tau_K$ are unchanged, only the realisation-to-realisation
   spread of the flow's energy is removed. The OU steps that follow are unchanged (at
-  Ku = 1e7 each ``c_i`` diffuses by ``(2 T / (tau_f M))^{1/2} ~ 2e-3`` over an episode).
-* ``velocity_scale``: ``"total"`` (default) ``u_rms = <u.u>^{1/2}``; ``"component"``: the
-  velocity ``v_s`` and the Kubo number are measured against the one-component rms
-  ``<u_x^2>^{1/2} = u_rms / sqrt(2)``. The fields are the same; :attr:`u_rms` (the
-  reference velocity the environment scales ``v_s`` by) becomes ``1/sqrt(2)`` and
-  ``tau_f = Ku ell_f / (u_rms / sqrt(2))``. So ``v_s = 0.707`` reads ``0.5 <u.u>^{1/2}`` and
-  Ku reads ``Ku sqrt(2)`` in the default's units; ``tau_K = 0.5`` is unchanged.
-* The box ``L = n_grid * spacing`` (10 ``ell_f`` by default) is set by ``n_grid``.
+  Ku = 1e7 each $c_i$ diffuses by $(2T/(\tau_f M))^{1/2} \sim 2\times10^{-3}$ over an
+  episode).
+* ``velocity_scale``: ``"total"`` (default)
+  $u_\mathrm{rms} = \langle\boldsymbol u\cdot\boldsymbol u\rangle^{1/2}$; ``"component"``: the
+  velocity $v_s$ and the Kubo number are measured against the one-component rms
+  $\langle u_x^2\rangle^{1/2} = u_\mathrm{rms}/\sqrt2$. The fields are the same; :attr:`u_rms`
+  (the reference velocity the environment scales $v_s$ by) becomes $1/\sqrt2$ and
+  $\tau_f = \mathrm{Ku}\,\ell_f/(u_\mathrm{rms}/\sqrt2)$. So $v_s = 0.707$ reads
+  $0.5\,\langle\boldsymbol u\cdot\boldsymbol u\rangle^{1/2}$ and Ku reads $\mathrm{Ku}\sqrt2$ in
+  the default's units; $\tau_K = 0.5$ is unchanged.
+* The box $L$ = ``n_grid * spacing`` (10 $\ell_f$ by default) is set by ``n_grid``.
 """
 
 from __future__ import annotations
@@ -85,13 +104,13 @@ VELOCITY_SCALES = ("total", "component")
 
 
 def gaussian_spectrum(grid: PeriodicGrid, amplitude: float, ell: float, device) -> torch.Tensor:
-    """Discrete power spectrum ``P_k = (2 pi ell^2 / h^2) amplitude exp(-k^2 ell^2 / 2)``.
+    r"""Discrete power spectrum $P_k = (2\pi\ell^2/h^2)\,A\exp(-k^2\ell^2/2)$, $A$ = ``amplitude``.
 
-    This is the FFT (unnormalised, node spacing ``h``) of the periodic sum of
-    ``C(r) = amplitude exp(-r^2 / 2 ell^2)``, up to aliasing of modes beyond the Nyquist
-    wavenumber (relative size ``exp(-(pi ell / h)^2 / 2)``, i.e. nil for ``h << ell``).
+    This is the FFT (unnormalised, node spacing $h$) of the periodic sum of
+    $C(r) = A\exp(-r^2/2\ell^2)$, up to aliasing of modes beyond the Nyquist
+    wavenumber (relative size $\exp(-(\pi\ell/h)^2/2)$, i.e. nil for $h \ll \ell$).
     The analytic form avoids the round-off floor of a numerically transformed covariance,
-    which the ``k^4`` of second derivatives would amplify.
+    which the $k^4$ of second derivatives would amplify.
     """
     kx, ky = grid.wavenumbers(device=device, dtype=torch.float64)
     k2 = kx**2 + ky**2
@@ -99,10 +118,11 @@ def gaussian_spectrum(grid: PeriodicGrid, amplitude: float, ell: float, device) 
 
 
 def stream_function_channels(psi_hat: torch.Tensor, grid: PeriodicGrid) -> torch.Tensor:
-    """Channels ``(u_x, u_y, S_xx, S_xy, omega)`` of stream functions given by their FFT.
+    r"""Channels $(u_x, u_y, S_{xx}, S_{xy}, \omega)$ of stream functions given by their FFT.
 
-    ``u_x = psi_y``, ``u_y = -psi_x``, ``S_xx = psi_xy``, ``S_xy = (psi_yy - psi_xx)/2``,
-    ``omega = -(psi_xx + psi_yy)``. Input ``(..., n, n)`` complex; output ``(..., n, n, 5)``.
+    $u_x = \psi_y$, $u_y = -\psi_x$, $S_{xx} = \psi_{xy}$, $S_{xy} = (\psi_{yy} - \psi_{xx})/2$,
+    $\omega = -(\psi_{xx} + \psi_{yy})$. Input ``(..., n, n)`` complex; output
+    ``(..., n, n, 5)``.
     """
     kx, ky = grid.wavenumbers(device=psi_hat.device, dtype=torch.float64)
 
@@ -118,9 +138,9 @@ def stream_function_channels(psi_hat: torch.Tensor, grid: PeriodicGrid) -> torch
 
 
 def band_limit(grid: PeriodicGrid, ell: float, tol: float = 1e-13) -> int | None:
-    """Smallest ``K`` such that every mode with ``max(|m_x|, |m_y|) > K`` has
-    ``exp(-k^2 ell^2 / 4) max(1, k^2 ell^2) <= tol * max_k(...)`` (``k = 2 pi m / L``);
-    ``None`` when no ``K < n/2 - 1`` does (coarse grids: use the full FFT)."""
+    r"""Smallest $K$ such that every mode with $\max(|m_x|, |m_y|) > K$ has
+    $\exp(-k^2\ell^2/4)\max(1, k^2\ell^2) \le \mathrm{tol}\cdot\max_k(\dots)$ ($k = 2\pi m/L$);
+    ``None`` when no $K < n/2 - 1$ does (coarse grids: use the full FFT)."""
     def weight(k2: float) -> float:
         return math.exp(-0.25 * k2 * ell**2) * max(1.0, k2 * ell**2)
 
@@ -135,18 +155,20 @@ def band_limit(grid: PeriodicGrid, ell: float, tol: float = 1e-13) -> int | None
 
 
 class OUCoefficients:
-    """The ``M`` Ornstein-Uhlenbeck coefficients ``c_i(t)`` of a flow, ``(n_flows, M)`` in
-    ``self.coeffs``, correlation time ``self.tau_f``, stationary variance ``1/M``: the time
+    r"""The $M$ Ornstein-Uhlenbeck coefficients $c_i(t)$ of a flow, ``(n_flows, M)`` in
+    ``self.coeffs``, correlation time ``self.tau_f``, stationary variance $1/M$: the time
     dependence shared by the 2D (:class:`StochasticFlow`) and 3D
     (:class:`~swimrl.flows.stochastic3d.StochasticFlow3D`) stochastic flows."""
 
     def ou_factors(self, dt: float) -> tuple[float, float]:
-        """``(e^{-dt/tau_f}, sqrt((1 - e^{-2 dt/tau_f}) / M))`` computed in double precision."""
+        r"""$\big(e^{-\delta t/\tau_f}, \sqrt{(1 - e^{-2\delta t/\tau_f})/M}\big)$ computed in
+        double precision."""
         decay = math.exp(-dt / self.tau_f)
         return decay, math.sqrt(-math.expm1(-2 * dt / self.tau_f) / self.n_basis)
 
     def advance(self, dt: float) -> None:
-        """Exact OU step of all coefficients: ``c <- c e^{-dt/tau_f} + sigma_dt xi``."""
+        r"""Exact OU step of all coefficients:
+        $c \leftarrow c\,e^{-\delta t/\tau_f} + \sigma_{\delta t}\,\xi$."""
         decay, sigma = self.ou_factors(dt)
         noise = self._randn(self.n_flows, self.n_basis)
         self.coeffs.mul_(decay).add_(noise, alpha=sigma)
@@ -154,18 +176,22 @@ class OUCoefficients:
 
 
 class BandLimitedSynthesis:
-    """``stream_function_channels(sqrt(P) FFT2(w))`` of real white fields ``w`` by direct
-    sums over the retained modes ``|m_y| <= K`` (complex) and ``0 <= m_x <= K`` (real
-    symmetry, weights ``1, 2, 2, ...``):
+    r"""``stream_function_channels(sqrt(P) FFT2(w))`` of real white fields $w$ by direct
+    sums over the retained modes $|m_y| \le K$ (complex) and $0 \le m_x \le K$ (real
+    symmetry, weights $a_{m_x} = 1, 2, 2, \dots$):
 
-    ``W(m) = sum_{j} w_j e^{-2 pi i m.j / n}``;
-    ``q_c(j) = n^{-2} Re sum_{m_y} sum_{m_x >= 0} a_{m_x} mult_c(m) sqrt(P_m) W(m)
-    e^{2 pi i m.j / n}``,
+    $$
+    W(\boldsymbol m) = \sum_{\boldsymbol j} w_{\boldsymbol j}\,
+    e^{-2\pi i\,\boldsymbol m\cdot\boldsymbol j/n},\qquad
+    q_c(\boldsymbol j) = n^{-2}\,\mathrm{Re}\sum_{m_y}\sum_{m_x\ge 0} a_{m_x}\,
+    \mathrm{mult}_c(\boldsymbol m)\sqrt{P_{\boldsymbol m}}\,W(\boldsymbol m)\,
+    e^{2\pi i\,\boldsymbol m\cdot\boldsymbol j/n},
+    $$
 
-    with the channel multipliers ``mult = (i k_y, -i k_x, -k_x k_y, (k_x^2 - k_y^2)/2,
-    k_x^2 + k_y^2)`` of :func:`stream_function_channels`. In float64 up to the last sum (in
-    ``dtype``, see :meth:`__call__`); fields are indexed ``[y, x]`` as
-    :meth:`PeriodicGrid.wavenumbers`.
+    with the channel multipliers
+    $\mathrm{mult} = \big(ik_y, -ik_x, -k_xk_y, (k_x^2 - k_y^2)/2, k_x^2 + k_y^2\big)$ of
+    :func:`stream_function_channels`. In float64 up to the last sum (in ``dtype``, see
+    :meth:`__call__`); fields are indexed ``[y, x]`` as :meth:`PeriodicGrid.wavenumbers`.
     """
 
     def __init__(self, grid: PeriodicGrid, sqrt_spectrum: torch.Tensor, k_keep: int,
@@ -217,11 +243,11 @@ class BandLimitedSynthesis:
 
 
 class StochasticFlow(OUCoefficients, GriddedFlow):
-    """``n_flows`` independent realisations of the stochastic flow at Kubo number ``kubo``.
+    r"""``n_flows`` independent realisations of the stochastic flow at Kubo number ``kubo``.
 
-    Each realisation has its own ``M`` components ``psi_i`` and coefficients ``c_i``;
+    Each realisation has its own $M$ components $\psi_i$ and coefficients $c_i$;
     :meth:`reset` redraws both for the selected flows (with ``basis="fixed"``: only the
-    ``c_i``, every realisation sharing one set of ``psi_i``). ``amplitudes`` and
+    $c_i$, every realisation sharing one set of $\psi_i$). ``amplitudes`` and
     ``velocity_scale``: see the module docstring. The keyword defaults (for library calls)
     are read from ``conf/flow/stochastic.yaml`` (``device``: ``conf/evaluate.yaml``;
     :mod:`swimrl.conf_values`).
@@ -277,8 +303,8 @@ class StochasticFlow(OUCoefficients, GriddedFlow):
 
     def draw_components(self, count: int, generator: torch.Generator | None = None,
                         out: torch.Tensor | None = None) -> torch.Tensor:
-        """Channels of ``count * M`` fresh components: ``(count, n, n, M, 5)`` in ``self.dtype``
-        (from ``generator``, default the flow's; written into ``out`` if given)."""
+        r"""Channels of ``count`` $\times M$ fresh components: ``(count, n, n, M, 5)`` in
+        ``self.dtype`` (from ``generator``, default the flow's; written into ``out`` if given)."""
         n, m = self.grid.n, self.n_basis
         if out is None:
             out = torch.empty(count, n, n, m, 5, device=self.device, dtype=self.dtype)
@@ -295,7 +321,7 @@ class StochasticFlow(OUCoefficients, GriddedFlow):
         return out
 
     def reset(self, flows: torch.Tensor | None = None) -> None:
-        """Redraw components (unless fixed) and coefficients ``c_i(0)`` of selected flows."""
+        """Redraw components (unless fixed) and coefficients $c_i(0)$ of selected flows."""
         if flows is None:
             idx = torch.arange(self.n_flows, device=self.device)
         else:

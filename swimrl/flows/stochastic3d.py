@@ -1,73 +1,96 @@
 r"""The paper's stochastic flow carried to 3D, as random Fourier modes at the swimmers.
 
-Units: ``ell_f = u_rms = 1``, with ``u_rms = <u.u>^{1/2}`` the rms of the whole velocity
-vector (the 2D flow's default ``velocity_scale="total"``; one component has rms
-``u_rms / sqrt(3)``), so ``tau_f = Ku ell_f / u_rms = Ku``.
+Units: $\ell_f = u_\mathrm{rms} = 1$, with
+$u_\mathrm{rms} = \langle\boldsymbol u\cdot\boldsymbol u\rangle^{1/2}$ the rms of the whole
+velocity vector (the 2D flow's default ``velocity_scale="total"``; one component has rms
+$u_\mathrm{rms}/\sqrt3$), so $\tau_f = \mathrm{Ku}\,\ell_f/u_\mathrm{rms} = \mathrm{Ku}$.
 
-Model. ``u = curl a``, ``a(x, t) = sum_{i=1..M} c_i(t) a_i(x)``, each ``a_i`` a vector of
-three independent Gaussian fields with ``<a_i^p(x) a_j^q(x')> = delta_ij delta_pq B
-exp(-r^2 / 2 ell^2)``, ``r = |x - x'|``, ``B = u_rms^2 ell^2 / 6``, and the coefficients of
-the 2D flow: ``<c_i(t) c_j(t')> = delta_ij / M exp(-|t - t'| / tau_f)``. ``u`` is
-incompressible, Gaussian given the ``c_i`` (as in 2D), statistically homogeneous and
-isotropic, with (``f = exp(-r^2 / 2 ell^2)``)
+Model. $\boldsymbol u = \nabla\times\boldsymbol a$,
+$\boldsymbol a(\boldsymbol x, t) = \sum_{i=1}^{M} c_i(t)\,\boldsymbol a_i(\boldsymbol x)$, each
+$\boldsymbol a_i$ a vector of three independent Gaussian fields with
+$\langle a_i^p(\boldsymbol x)\,a_j^q(\boldsymbol x')\rangle
+= \delta_{ij}\delta_{pq}\,B\exp(-r^2/2\ell^2)$, $r = |\boldsymbol x - \boldsymbol x'|$,
+$B = u_\mathrm{rms}^2\ell^2/6$, and the coefficients of the 2D flow:
+$\langle c_i(t)\,c_j(t')\rangle = \frac{\delta_{ij}}{M}\exp(-|t - t'|/\tau_f)$. $\boldsymbol u$ is
+incompressible, Gaussian given the $c_i$ (as in 2D), statistically homogeneous and
+isotropic, with ($f = \exp(-r^2/2\ell^2)$, :func:`velocity_covariance`)
 
-``R_ij(r) = <u_i(x) u_j(x + r)> = (u_rms^2 / 3) f [(1 - r^2 / 2 ell^2) delta_ij
-+ r_i r_j / 2 ell^2]``  (:func:`velocity_covariance`):
+$$
+R_{ij}(\boldsymbol r) = \langle u_i(\boldsymbol x)\,u_j(\boldsymbol x + \boldsymbol r)\rangle
+= \frac{u_\mathrm{rms}^2}{3}\,f\left[\Big(1 - \frac{r^2}{2\ell^2}\Big)\delta_{ij}
++ \frac{r_i r_j}{2\ell^2}\right]:
+$$
 
-longitudinal correlation ``R_LL(r) / R_LL(0) = exp(-r^2 / 2 ell^2)``, the Gaussian
-correlation of length ``ell_f`` (the same as the 2D flow's: there, too, the velocity's
-longitudinal correlation is the stream function's Gaussian). Moments (derivatives of ``R``
-at 0; ``<A_ij A_kl> = -d_j d_l R_ik(0)``, :func:`gradient_covariance`):
+longitudinal correlation $R_{LL}(r)/R_{LL}(0) = \exp(-r^2/2\ell^2)$, the Gaussian
+correlation of length $\ell_f$ (the same as the 2D flow's: there, too, the velocity's
+longitudinal correlation is the stream function's Gaussian). Moments (derivatives of $R$
+at 0; $\langle A_{ij}A_{kl}\rangle = -\partial_j\partial_l R_{ik}(0)$,
+:func:`gradient_covariance`):
 
-* ``<u_i u_j> = delta_ij u_rms^2 / 3``, ``<u.u> = u_rms^2``;
-* ``<A_ij A_kl> = (u_rms^2 / 6 ell^2)(4 delta_ik delta_jl - delta_ij delta_kl
-  - delta_il delta_jk)`` (the isotropic incompressible form; its contraction with
-  ``delta_ij`` vanishes: ``tr A = 0``); ``<A_ij A_ij> = 5 u_rms^2 / ell^2``,
-  ``<A_ij A_ji> = 0``, so ``<S_ij S_ij> = <O_ij O_ij> = 5/2`` and ``<|omega|^2> = 5``;
-* ``tau_K = <A_ij A_ij>^{-1/2} = ell_f / (sqrt(5) u_rms) = 0.447`` (the 2D flow's
-  definition, ``tau_K = ell_f / (2 u_rms)`` there; here it equals ``(2 <S_ij S_ij>)^{-1/2}``,
-  the turbulence ``(nu / epsilon)^{1/2}``).
+* $\langle u_i u_j\rangle = \delta_{ij}\,u_\mathrm{rms}^2/3$,
+  $\langle\boldsymbol u\cdot\boldsymbol u\rangle = u_\mathrm{rms}^2$;
+* $\langle A_{ij}A_{kl}\rangle = \frac{u_\mathrm{rms}^2}{6\ell^2}\,(4\delta_{ik}\delta_{jl} -
+  \delta_{ij}\delta_{kl} - \delta_{il}\delta_{jk})$ (the isotropic incompressible form;
+  its contraction with $\delta_{ij}$ vanishes: $\mathrm{tr}\,\mathbb A = 0$);
+  $\langle A_{ij}A_{ij}\rangle = 5u_\mathrm{rms}^2/\ell^2$, $\langle A_{ij}A_{ji}\rangle = 0$,
+  so $\langle S_{ij}S_{ij}\rangle = \langle O_{ij}O_{ij}\rangle = 5/2$ and
+  $\langle|\boldsymbol\omega|^2\rangle = 5$;
+* $\tau_K = \langle A_{ij}A_{ij}\rangle^{-1/2} = \ell_f/(\sqrt5\,u_\mathrm{rms}) = 0.447$ (the
+  2D flow's definition, $\tau_K = \ell_f/(2u_\mathrm{rms})$ there; here it equals
+  $(2\langle S_{ij}S_{ij}\rangle)^{-1/2}$, the turbulence $(\nu/\varepsilon)^{1/2}$).
 
-Representation (why not a grid: the paper's ``h = ell_f / 40`` on a ``10 ell_f`` box is
-``400^3 x M x 12`` values; a coarse grid would add an interpolation error to the gradients
-that the swimmer reads). Each ``a_i`` is a sum of ``K`` random Fourier modes,
+Representation (why not a grid: the paper's $h = \ell_f/40$ on a $10\,\ell_f$ box is
+$400^3\times M\times 12$ values; a coarse grid would add an interpolation error to the
+gradients that the swimmer reads). Each $\boldsymbol a_i$ is a sum of $K$ random Fourier modes,
 
-``a_i(x) = sqrt(B / K) sum_{n=1..K} [xi_n cos(k_n.x) + eta_n sin(k_n.x)]``,
-``k_n ~ N(0, I / ell^2)``, ``xi_n, eta_n ~ N(0, I_3)``,
+$$
+\boldsymbol a_i(\boldsymbol x) = \sqrt{B/K}\sum_{n=1}^{K}
+\big[\boldsymbol\xi_n\cos(\boldsymbol k_n\cdot\boldsymbol x)
++ \boldsymbol\eta_n\sin(\boldsymbol k_n\cdot\boldsymbol x)\big],\qquad
+\boldsymbol k_n\sim\mathcal N(0, \mathbb I/\ell^2),\quad
+\boldsymbol\xi_n, \boldsymbol\eta_n\sim\mathcal N(0, \mathbb I_3),
+$$
 
-so ``u = sum_{i,n} c_i [P_n cos(k_n.x) + Q_n sin(k_n.x)]`` with ``P_n = sqrt(B/K) k_n x eta_n``
-and ``Q_n = -sqrt(B/K) k_n x xi_n``, and ``A_ij = sum c_i [Q_i cos - P_i sin] k_j``
-analytically; ``k_n . P_n = k_n . Q_n = 0``, so ``div u = tr A = 0`` to round-off, mode by
-mode. The wavevectors are drawn per realisation (with ``basis="redrawn"``). Its error:
+so $\boldsymbol u = \sum_{i,n} c_i\,[\boldsymbol P_n\cos(\boldsymbol k_n\cdot\boldsymbol x) +
+\boldsymbol Q_n\sin(\boldsymbol k_n\cdot\boldsymbol x)]$ with
+$\boldsymbol P_n = \sqrt{B/K}\,\boldsymbol k_n\times\boldsymbol\eta_n$ and
+$\boldsymbol Q_n = -\sqrt{B/K}\,\boldsymbol k_n\times\boldsymbol\xi_n$, and
+$A_{ij} = \sum c_i\,[Q_i\cos - P_i\sin]\,k_j$ analytically;
+$\boldsymbol k_n\cdot\boldsymbol P_n = \boldsymbol k_n\cdot\boldsymbol Q_n = 0$, so
+$\nabla\cdot\boldsymbol u = \mathrm{tr}\,\mathbb A = 0$ to round-off, mode by mode. The
+wavevectors are drawn per realisation (with ``basis="redrawn"``). Its error:
 
-* Over realisations (wavevectors, amplitudes, ``c_i``) every second moment above is exact
-  for any ``K`` (``E[cos(k.r)] = exp(-r^2 / 2 ell^2)`` for ``k ~ N(0, I/ell^2)``).
+* Over realisations (wavevectors, amplitudes, $c_i$) every second moment above is exact
+  for any $K$ ($E[\cos(\boldsymbol k\cdot\boldsymbol r)] = \exp(-r^2/2\ell^2)$ for
+  $\boldsymbol k\sim\mathcal N(0, \mathbb I/\ell^2)$).
 * One realisation is Gaussian given its wavevectors, with the covariance
-  ``B K^{-1} sum_n cos(k_n.r)`` per component of ``a_i``: exact at ``r = 0``, with a random
-  error of std ``B (1 - f(r)^2) / sqrt(2K)`` (at most ``0.088 B`` for ``K = 64``). Its space
-  averages are the mode sums (:meth:`StochasticFlow3D.realisation_moments`): per component
-  field, ``<u.u>`` has a relative spread ``sqrt(1.5/K)`` (0.15) and ``<A_ij A_ij>``
-  ``sqrt(5.3/K)`` (0.29) about 1 and 5; the ``c_i`` spread ``sum_i c_i^2`` far more
-  (``sqrt(2/M) = 0.63``, as in 2D).
+  $B K^{-1}\sum_n\cos(\boldsymbol k_n\cdot\boldsymbol r)$ per component of $\boldsymbol a_i$:
+  exact at $r = 0$, with a random error of std $B\,(1 - f(r)^2)/\sqrt{2K}$ (at most
+  $0.088\,B$ for $K = 64$). Its space averages are the mode sums
+  (:meth:`StochasticFlow3D.realisation_moments`): per component field,
+  $\langle\boldsymbol u\cdot\boldsymbol u\rangle$ has a relative spread $\sqrt{1.5/K}$ (0.15)
+  and $\langle A_{ij}A_{ij}\rangle$ $\sqrt{5.3/K}$ (0.29) about 1 and 5; the $c_i$ spread
+  $\sum_i c_i^2$ far more ($\sqrt{2/M} = 0.63$, as in 2D).
 * The one-point law over realisations is a Gaussian scale mixture: a velocity component has
-  excess kurtosis ``6/M + 9/(M K)``; ``6/M`` comes from the ``c_i`` (the 2D flow has it
-  too), ``9/(MK) = 0.028`` (``M = 5``, ``K = 64``) from the modes; Gaussian as ``K``
-  grows.
+  excess kurtosis $6/M + 9/(MK)$; $6/M$ comes from the $c_i$ (the 2D flow has it too),
+  $9/(MK) = 0.028$ ($M = 5$, $K = 64$) from the modes; Gaussian as $K$ grows.
 
-Defaults: ``M = 5`` (the paper's), ``K = 64`` modes per component (``M K = 320`` per
+Defaults: $M = 5$ (the paper's), $K = 64$ modes per component ($MK = 320$ per
 realisation: the per-realisation spread of the flow's energy from the modes is a quarter of
-that from the ``c_i``; the cost is a ``(S, 3) x (3, MK)`` and two ``(S, MK) x (MK, 12)``
+that from the $c_i$; the cost is a $(S, 3)\times(3, MK)$ and two $(S, MK)\times(MK, 12)$
 products per evaluation). The field is unbounded, not periodic: no box, no periodic images
-(the 2D box adds images, ``< 2 e^{-12.5}`` in the covariance), positions need no wrapping;
-phases ``k.x`` are evaluated in the flow's dtype (float32: an absolute phase error about
-``6e-8 |k| |x|``, ``2e-5`` at ``|x| = 100 ell_f``).
+(the 2D box adds images, $< 2e^{-12.5}$ in the covariance), positions need no wrapping;
+phases $\boldsymbol k\cdot\boldsymbol x$ are evaluated in the flow's dtype (float32: an
+absolute phase error about $6\times10^{-8}\,|\boldsymbol k|\,|\boldsymbol x|$,
+$2\times10^{-5}$ at $|\boldsymbol x| = 100\,\ell_f$).
 
-OU update (exact for any step, as in 2D): ``c(t+dt) = c e^{-dt/tau_f} +
-sqrt((1 - e^{-2dt/tau_f}) / M) xi``; ``c(0) ~ N(0, 1/M)``.
+OU update (exact for any step, as in 2D):
+$c(t + \delta t) = c\,e^{-\delta t/\tau_f} + \sqrt{(1 - e^{-2\delta t/\tau_f})/M}\;\xi$;
+$c(0)\sim\mathcal N(0, 1/M)$.
 
 ``basis="redrawn"`` (default) draws new wavevectors and amplitudes with every realisation
 (:meth:`~StochasticFlow3D.reset`); ``"fixed"`` draws one set from its own generator seeded
-with ``basis_seed`` and gives it to every realisation, which then differ only by ``c_i``
+with ``basis_seed`` and gives it to every realisation, which then differ only by $c_i$
 (the ensemble moments then hold on average over ``basis_seed``, as in 2D).
 
 ``flow=stochastic3d`` (:class:`Stochastic3DSpec`, ``conf/flow/stochastic3d.yaml``) builds it
@@ -99,15 +122,20 @@ BASIS_MODES = ("redrawn", "fixed")
 
 
 def potential_amplitude(ell: float = 1.0, u_rms: float = 1.0) -> float:
-    """``B = u_rms^2 ell^2 / 6``: the variance of one component of ``a_i`` that gives
-    ``<u.u> = 6 B / ell^2 = u_rms^2``."""
+    r"""$B = u_\mathrm{rms}^2\ell^2/6$: the variance of one component of $\boldsymbol a_i$ that
+    gives $\langle\boldsymbol u\cdot\boldsymbol u\rangle = 6B/\ell^2 = u_\mathrm{rms}^2$."""
     return u_rms**2 * ell**2 / 6.0
 
 
 def velocity_covariance(r: torch.Tensor, ell: float = 1.0, u_rms: float = 1.0) -> torch.Tensor:
-    """``R_ij(r) = <u_i(x) u_j(x + r)> = (u_rms^2/3) f [(1 - r^2/2ell^2) delta_ij
-    + r_i r_j / 2ell^2]``, ``f = exp(-r^2 / 2 ell^2)``, for separations ``r`` ``(..., 3)``:
-    ``(..., 3, 3)``."""
+    r"""The velocity covariance at separations ``r`` ``(..., 3)``: ``(..., 3, 3)``,
+
+    $$
+    R_{ij}(\boldsymbol r) = \langle u_i(\boldsymbol x)\,u_j(\boldsymbol x + \boldsymbol r)\rangle
+    = \frac{u_\mathrm{rms}^2}{3}\,f\left[\Big(1 - \frac{r^2}{2\ell^2}\Big)\delta_{ij}
+    + \frac{r_i r_j}{2\ell^2}\right],\qquad f = \exp(-r^2/2\ell^2).
+    $$
+    """
     s = (r * r).sum(-1, keepdim=True).unsqueeze(-1) / ell**2           # (..., 1, 1)
     eye = torch.eye(3, dtype=r.dtype, device=r.device)
     rr = r.unsqueeze(-1) * r.unsqueeze(-2) / (2 * ell**2)
@@ -116,8 +144,9 @@ def velocity_covariance(r: torch.Tensor, ell: float = 1.0, u_rms: float = 1.0) -
 
 def gradient_covariance(ell: float = 1.0, u_rms: float = 1.0,
                         dtype: torch.dtype = torch.float64) -> torch.Tensor:
-    """``<A_ij A_kl> = (u_rms^2 / 6 ell^2)(4 delta_ik delta_jl - delta_ij delta_kl
-    - delta_il delta_jk)`` at one point, indexed ``[i, j, k, l]`` ``(3, 3, 3, 3)``."""
+    r"""$\langle A_{ij}A_{kl}\rangle = \frac{u_\mathrm{rms}^2}{6\ell^2}\,(4\delta_{ik}\delta_{jl} -
+    \delta_{ij}\delta_{kl} - \delta_{il}\delta_{jk})$ at one point, indexed ``[i, j, k, l]``
+    ``(3, 3, 3, 3)``."""
     d = torch.eye(3, dtype=dtype)
     e = torch.einsum
     form = 4 * e("ik,jl->ijkl", d, d) - e("ij,kl->ijkl", d, d) - e("il,jk->ijkl", d, d)
@@ -126,9 +155,11 @@ def gradient_covariance(ell: float = 1.0, u_rms: float = 1.0,
 
 def mode_sum(pos: torch.Tensor, k: torch.Tensor, table: torch.Tensor, c: torch.Tensor,
              n_waves: int) -> torch.Tensor:
-    """``(u, A)`` flattened, ``(F', S, 12)``: ``[w cos(k.x), w sin(k.x)] @ table`` with the
-    per-mode weight ``w_n = c_{n // K}`` (``K = n_waves``), ``pos`` ``(F', S, 3)``, ``k``
-    ``(F' or 1, MK, 3)``, ``table`` ``(F' or 1, 2MK, 12)``, ``c`` ``(F', M)``."""
+    r"""$(\boldsymbol u, \mathbb A)$ flattened, ``(F', S, 12)``:
+    $[w\cos(\boldsymbol k\cdot\boldsymbol x), w\sin(\boldsymbol k\cdot\boldsymbol x)]$ ``@ table``
+    with the per-mode weight $w_n = c_{\lfloor n/K\rfloor}$ ($K$ = ``n_waves``), ``pos``
+    ``(F', S, 3)``, ``k`` ``(F' or 1, MK, 3)``, ``table`` ``(F' or 1, 2MK, 12)``, ``c``
+    ``(F', M)``."""
     w = c.repeat_interleave(n_waves, dim=-1).repeat(1, 2).unsqueeze(-2)  # (F', 1, 2MK)
     phase = pos @ k.transpose(-1, -2)                                    # (F', S, MK)
     return (torch.cat((torch.cos(phase), torch.sin(phase)), -1) * w) @ table
@@ -147,18 +178,18 @@ def compiled_mode_sum():
 
 
 class StochasticFlow3D(OUCoefficients, PointFlow):
-    """``n_flows`` realisations of the 3D stochastic flow at Kubo number ``kubo``.
+    r"""``n_flows`` realisations of the 3D stochastic flow at Kubo number ``kubo``.
 
-    Each realisation has ``M`` potential components of ``K`` modes each (module docstring)
-    and its coefficients ``c_i``; :meth:`reset` redraws both for the selected flows (with
-    ``basis="fixed"``: only the ``c_i``). Bad values raise :class:`~swimrl.errors.ConfigError`
+    Each realisation has $M$ potential components of $K$ modes each (module docstring)
+    and its coefficients $c_i$; :meth:`reset` redraws both for the selected flows (with
+    ``basis="fixed"``: only the $c_i$). Bad values raise :class:`~swimrl.errors.ConfigError`
     naming ``flow.<keyword>``.
 
     Attributes: :attr:`wavevectors` ``(R, MK, 3)``; the velocity amplitudes
-    :attr:`amp_cos` (``P_n``) and :attr:`amp_sin` (``Q_n``) and the potential's
-    :attr:`pot_cos` (``sqrt(B/K) xi_n``) and :attr:`pot_sin` (``sqrt(B/K) eta_n``), all
-    ``(R, MK, 3)``, mode ``n`` belonging to component ``n // K``; ``R = F`` (redrawn) or 1
-    (fixed); :attr:`coeffs` ``(F, M)``.
+    :attr:`amp_cos` ($\boldsymbol P_n$) and :attr:`amp_sin` ($\boldsymbol Q_n$) and the
+    potential's :attr:`pot_cos` ($\sqrt{B/K}\,\boldsymbol\xi_n$) and :attr:`pot_sin`
+    ($\sqrt{B/K}\,\boldsymbol\eta_n$), all ``(R, MK, 3)``, mode $n$ belonging to component
+    $\lfloor n/K\rfloor$; $R = F$ (redrawn) or 1 (fixed); :attr:`coeffs` ``(F, M)``.
     """
 
     dim = 3
@@ -266,14 +297,20 @@ class StochasticFlow3D(OUCoefficients, PointFlow):
 
     def sample(self, pos: torch.Tensor, flows: torch.Tensor | None = None,
                coeffs: torch.Tensor | None = None) -> tuple[torch.Tensor, torch.Tensor]:
-        """``u`` ``(F', S, 3)`` and ``A_ij = d_j u_i`` ``(F', S, 3, 3)`` at ``pos``
-        ``(F', S, 3)`` in ``flows`` (all if None), with the current coefficients (or
+        r"""$\boldsymbol u$ ``(F', S, 3)`` and $A_{ij} = \partial_j u_i$ ``(F', S, 3, 3)`` at
+        ``pos`` ``(F', S, 3)`` in ``flows`` (all if None), with the current coefficients (or
         ``coeffs`` ``(F, M)``):
 
-        ``u = sum_n w_n (P_n cos k_n.x + Q_n sin k_n.x)``,
-        ``A_ij = sum_n w_n (Q_ni cos k_n.x - P_ni sin k_n.x) k_nj``,
+        $$
+        \boldsymbol u = \sum_n w_n\big(\boldsymbol P_n\cos\boldsymbol k_n\cdot\boldsymbol x
+        + \boldsymbol Q_n\sin\boldsymbol k_n\cdot\boldsymbol x\big),\qquad
+        A_{ij} = \sum_n w_n\big(Q_{ni}\cos\boldsymbol k_n\cdot\boldsymbol x
+        - P_{ni}\sin\boldsymbol k_n\cdot\boldsymbol x\big)\,k_{nj},
+        $$
 
-        as one product ``[w cos(k.x), w sin(k.x)] @`` :attr:`table` ``(F', S, 12)``.
+        as one product
+        $[w\cos(\boldsymbol k\cdot\boldsymbol x), w\sin(\boldsymbol k\cdot\boldsymbol x)]$ ``@``
+        :attr:`table` ``(F', S, 12)``.
         """
         everything = flows is None
         flows = self.flow_index(pos, flows)
@@ -291,7 +328,7 @@ class StochasticFlow3D(OUCoefficients, PointFlow):
         self._mode_sum = compiled_mode_sum()
 
     def velocity(self, pos: torch.Tensor, flows: torch.Tensor | None = None) -> torch.Tensor:
-        """``u`` alone (no gradient products), ``(F', S, 3)``."""
+        r"""$\boldsymbol u$ alone (no gradient products), ``(F', S, 3)``."""
         flows = self.flow_index(pos, flows)
         w, k, p, q, _, _ = self._modes(flows, None)
         phase = pos @ k.transpose(-1, -2)
@@ -299,16 +336,18 @@ class StochasticFlow3D(OUCoefficients, PointFlow):
 
     def vector_potential(self, pos: torch.Tensor, flows: torch.Tensor | None = None
                          ) -> torch.Tensor:
-        """``a = sum_i c_i a_i(x)`` ``(F', S, 3)``, whose curl is :meth:`velocity`."""
+        r"""$\boldsymbol a = \sum_i c_i\,\boldsymbol a_i(\boldsymbol x)$ ``(F', S, 3)``, whose curl
+        is :meth:`velocity`."""
         flows = self.flow_index(pos, flows)
         w, k, _, _, xi, eta = self._modes(flows, None)
         phase = pos @ k.transpose(-1, -2)
         return torch.cos(phase) @ (w * xi) + torch.sin(phase) @ (w * eta)
 
     def realisation_moments(self) -> tuple[torch.Tensor, torch.Tensor]:
-        """Space averages ``<u.u>`` and ``<A_ij A_ij>`` of each flow at its current ``c``,
-        ``(F,)`` float64: the mode sums ``sum_n w_n^2 (|P_n|^2 + |Q_n|^2)/2`` and the same
-        with ``|k_n|^2`` (exact for distinct wavevectors, i.e. almost surely)."""
+        r"""Space averages $\langle\boldsymbol u\cdot\boldsymbol u\rangle$ and
+        $\langle A_{ij}A_{ij}\rangle$ of each flow at its current $c$, ``(F,)`` float64: the
+        mode sums $\sum_n w_n^2\,(|\boldsymbol P_n|^2 + |\boldsymbol Q_n|^2)/2$ and the same
+        with $|\boldsymbol k_n|^2$ (exact for distinct wavevectors, i.e. almost surely)."""
         flows = torch.arange(self.n_flows, device=self.device)
         w, k, p, q, _, _ = self._modes(flows, None)
         energy = 0.5 * (w.double().squeeze(-1) ** 2) * ((p.double() ** 2).sum(-1)
@@ -316,30 +355,33 @@ class StochasticFlow3D(OUCoefficients, PointFlow):
         return energy.sum(-1), (energy * (k.double() ** 2).sum(-1)).sum(-1)
 
     def measured_stats(self) -> dict[str, float]:
-        """Averages over all flows of the space averages: ``u_rms = <u.u>^{1/2}``,
-        ``tau_K = <A_ij A_ij>^{-1/2}`` (the 2D flow's :meth:`measured_stats`)."""
+        r"""Averages over all flows of the space averages:
+        $u_\mathrm{rms} = \langle\boldsymbol u\cdot\boldsymbol u\rangle^{1/2}$,
+        $\tau_K = \langle A_{ij}A_{ij}\rangle^{-1/2}$ (the 2D flow's :meth:`measured_stats`)."""
         u2, a2 = self.realisation_moments()
         return {"u_rms": u2.mean().item() ** 0.5, "tau_K": a2.mean().item() ** -0.5}
 
     def speed_bound(self) -> torch.Tensor:
-        """``max_x |u(x, t)| <= sum_n |w_n| (|P_n| + |Q_n|)`` of each flow at its current
-        coefficients, ``(F,)`` (``|P cos + Q sin| <= |P| + |Q|``)."""
+        r"""$\max_{\boldsymbol x}|\boldsymbol u(\boldsymbol x, t)|
+        \le \sum_n |w_n|\,(|\boldsymbol P_n| + |\boldsymbol Q_n|)$ of each flow at its current
+        coefficients, ``(F,)``
+        ($|\boldsymbol P\cos + \boldsymbol Q\sin| \le |\boldsymbol P| + |\boldsymbol Q|$)."""
         return (self.coeffs.abs() * self.component_speed).sum(-1)
 
 
 @dataclass(frozen=True)
 class Stochastic3DSpec:
-    """``flow=stochastic3d``: the 3D stochastic flow at Kubo number ``kubo`` (module
+    r"""``flow=stochastic3d``: the 3D stochastic flow at Kubo number ``kubo`` (module
     docstring). Defaults from ``conf/flow/stochastic3d.yaml``.
 
     Parameters
     ----------
     kubo
-        ``Ku = tau_f u_rms / ell_f``.
+        $\mathrm{Ku} = \tau_f u_\mathrm{rms}/\ell_f$.
     n_modes
-        ``M``, the OU components.
+        $M$, the OU components.
     n_waves
-        ``K``, the random Fourier modes per component.
+        $K$, the random Fourier modes per component.
     basis
         ``redrawn`` (new modes per flow and episode) or ``fixed`` (one set, ``basis_seed``).
     basis_seed

@@ -1,4 +1,4 @@
-"""Beyond the paper (``docs/results.md``, "Beyond the paper"): point-to-point navigation
+"""Beyond the paper (``docs/beyond/``): point-to-point navigation
 (``beyondTarget``) and the energy cost of shape (``beyondEnergy``), drawn from the
 ``comparison.json`` records of ``swimrl-compare`` under ``<beyond>/`` (``figures.beyond``):
 

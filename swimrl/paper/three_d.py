@@ -1,4 +1,4 @@
-r"""Figures of the 3D study (``docs/results.md``, "Three dimensions"), drawn from its records:
+r"""Figures of the 3D study (``docs/beyond/three_d.md``), drawn from its records:
 
 * **threeDKu**: ``R_hat`` against Ku for smart (every training seed a point, their mean a
   line), STO and naive (``Lambda = 0.98``), 2D (the protocol's comparisons,

@@ -1,27 +1,31 @@
 r"""Energy cost of shape: the viscous drag of a fixed-volume spheroid swimming along its axis.
 
-A spheroid of fixed volume (equal-volume sphere radius ``a``), aspect ratio ``lambda``
-(symmetry semi-axis over equatorial semi-axis, :func:`aspect_ratio`) swims at speed ``v_s``
-along its symmetry axis ``n``. The power it spends against viscous drag is
+A spheroid of fixed volume (equal-volume sphere radius $a$), aspect ratio $\lambda$
+(symmetry semi-axis over equatorial semi-axis, :func:`aspect_ratio`) swims at speed $v_s$
+along its symmetry axis $\boldsymbol n$. The power it spends against viscous drag is
 
-``P = F v_s = 6 pi mu a v_s^2 K(Lambda)``,
+$$
+P = F v_s = 6\pi\mu a\,v_s^2\,K(\Lambda),
+$$
 
-``K(Lambda)`` (:func:`drag_factor`) the axial translational resistance of the no-slip spheroid
-divided by the Stokes drag ``6 pi mu a`` of the equal-volume sphere (``K(0) = 1``; minimal,
-``K = 0.9555``, for the prolate spheroid of ``lambda ~ 1.95``). swimrl reports the energy per
+$K(\Lambda)$ (:func:`drag_factor`) the axial translational resistance of the no-slip spheroid
+divided by the Stokes drag $6\pi\mu a$ of the equal-volume sphere ($K(0) = 1$; minimal,
+$K = 0.9555$, for the prolate spheroid of $\lambda \approx 1.95$). swimrl reports the energy per
 swimmer as
 
-``E_hat = (1/T) int_0^T K(Lambda(t)) dt``,
+$$
+\hat E = \frac1T\int_0^T K(\Lambda(t))\,\mathrm dt,
+$$
 
-the work against drag in units of ``6 pi mu a v_s^2 T`` (the equal-volume sphere swimming all
-of ``T`` has ``E_hat = 1``). With weight ``w`` the reward of decision ``i`` loses
-``w K(Lambda_i) v_s T_u``, so the return in units of ``v_s T`` is ``R_hat - w E_hat`` (the
-environment accumulates it; this module supplies ``K``).
+the work against drag in units of $6\pi\mu a\,v_s^2 T$ (the equal-volume sphere swimming all
+of $T$ has $\hat E = 1$). With weight $w$ the reward of decision $i$ loses
+$w\,K(\Lambda_i)\,v_s T_u$, so the return in units of $v_s T$ is $\hat R - w\hat E$ (the
+environment accumulates it; this module supplies $K$).
 
 Left out: the dissipation of the swimmer rotating relative to the flow and of its
-disturbance of the local strain (both depend on ``Lambda`` and on ``S``; only the translation
-at ``v_s`` relative to the fluid is counted), and the thrust-generation mechanism: the swimmer
-is treated as towed at ``v_s``, so ``P`` is a lower bound on the power of a self-propelled
+disturbance of the local strain (both depend on $\Lambda$ and on $\mathbb S$; only the translation
+at $v_s$ relative to the fluid is counted), and the thrust-generation mechanism: the swimmer
+is treated as towed at $v_s$, so $P$ is a lower bound on the power of a self-propelled
 swimmer, in the spirit of Piro,
 Vilfan, Golestanian & Mahault (2024), arXiv:2307.07301, who find a trade-off between
 time-optimal paths and dissipation with the aspect ratio.
@@ -48,8 +52,8 @@ _OBLATE = tuple(
 
 
 def aspect_ratio(shape_factor: torch.Tensor | float) -> torch.Tensor | float:
-    """Aspect ratio ``lambda = sqrt((1 + Lambda)/(1 - Lambda))``, the inverse of
-    ``Lambda = (lambda^2 - 1)/(lambda^2 + 1)``; ``Lambda`` in ``(-1, 1)``."""
+    r"""Aspect ratio $\lambda = \sqrt{(1 + \Lambda)/(1 - \Lambda)}$, the inverse of
+    $\Lambda = (\lambda^2 - 1)/(\lambda^2 + 1)$; $\Lambda$ in $(-1, 1)$."""
     if isinstance(shape_factor, torch.Tensor):
         return torch.sqrt((1 + shape_factor) / (1 - shape_factor))
     return math.sqrt((1 + shape_factor) / (1 - shape_factor))
@@ -64,43 +68,54 @@ def _horner(coeffs: tuple[float, ...], x: torch.Tensor) -> torch.Tensor:
 
 
 def drag_factor(shape_factor: torch.Tensor | float) -> torch.Tensor | float:
-    r"""Axial drag of the fixed-volume spheroid over that of the equal-volume sphere, ``K(Lambda)``.
+    r"""Axial drag of the fixed-volume spheroid over that of the equal-volume sphere, $K(\Lambda)$.
 
-    Semi-axes ``a_par = a lambda^{2/3}`` (along ``n``) and ``b = a lambda^{-1/3}`` (so
-    ``a_par b^2 = a^3``); eccentricity ``e``, with ``e^2 = 2|Lambda|/(1 + |Lambda|)`` on both
+    Semi-axes $a_\parallel = a\lambda^{2/3}$ (along $\boldsymbol n$) and $b = a\lambda^{-1/3}$ (so
+    $a_\parallel b^2 = a^3$); eccentricity $e$, with $e^2 = 2|\Lambda|/(1 + |\Lambda|)$ on both
     sides. The exact resistances (Happel & Brenner, *Low Reynolds Number Hydrodynamics*,
     Prentice-Hall 1965, ch. 4, axisymmetric flow past prolate and oblate spheroids; Kim &
     Karrila, *Microhydrodynamics*, Butterworth-Heinemann 1991, ch. 3, the spheroid resistance
-    function ``X^A``, ``F = 6 pi mu a_major X^A v``; checked against Oberbeck's ellipsoid
-    integrals in ``tests/test_energy.py``), with ``L = ln((1+e)/(1-e))``:
+    function $X^A$, $F = 6\pi\mu a_\mathrm{major} X^A v$; checked against Oberbeck's ellipsoid
+    integrals in ``tests/test_energy.py``), with $L = \ln\frac{1+e}{1-e}$:
 
-    * prolate (``Lambda > 0``, ``e = sqrt(1 - b^2/a_par^2)``):
-      ``F = 16 pi mu a_par v e^3 / [(1 + e^2) L - 2e]``, hence
-      ``K = (8/3) lambda^{2/3} e^3 / [(1 + e^2) L - 2e]``;
-    * oblate (``Lambda < 0``, ``e = sqrt(1 - a_par^2/b^2)``, broadside):
-      ``F = 8 pi mu b v e^3 / [e sqrt(1 - e^2) - (1 - 2e^2) arcsin e]``, hence
-      ``K = (4/3) lambda^{-1/3} e^3 / [e lambda - (1 - 2e^2) arcsin e]``.
+    * prolate ($\Lambda > 0$, $e = \sqrt{1 - b^2/a_\parallel^2}$):
 
-    For ``|Lambda| <`` :data:`SERIES_BELOW` the brackets are summed as series,
-    ``K = lambda^{2/3} / S_p(e^2)`` and ``K = lambda^{-1/3} / S_o(e^2)``, with
-    ``S_p = 1 + 2x/5 + 9x^2/35 + ...`` (from ``L = 2 sum e^{2k+1}/(2k+1)``) and
-    ``S_o = 1 + x/10 + 9x^2/280 + ...`` (from ``d/de [e sqrt(1-e^2) - (1-2e^2) arcsin e]
-    = 4 e arcsin e``), so ``K(0) = 1`` exactly and ``K = 1 - 2 Lambda/15 + O(Lambda^2)``
-    on both sides. ``L = 2 log1p(e) + 2 atanh(Lambda)`` (``1 - e^2 = lambda^{-2}``) and
-    ``arcsin e = atan2(e, lambda)`` keep the slender and disk limits accurate.
+        $$
+        F = \frac{16\pi\mu a_\parallel v\,e^3}{(1 + e^2) L - 2e},
+        \quad\text{hence}\quad
+        K = \frac{\tfrac83\,\lambda^{2/3} e^3}{(1 + e^2) L - 2e};
+        $$
 
-    ``Lambda`` in ``(-1, 1)``. A tensor is evaluated in float64 on its device and returned in
+    * oblate ($\Lambda < 0$, $e = \sqrt{1 - a_\parallel^2/b^2}$, broadside):
+
+        $$
+        F = \frac{8\pi\mu b v\,e^3}{e\sqrt{1 - e^2} - (1 - 2e^2)\arcsin e},
+        \quad\text{hence}\quad
+        K = \frac{\tfrac43\,\lambda^{-1/3} e^3}{e\lambda - (1 - 2e^2)\arcsin e}.
+        $$
+
+    For $|\Lambda| <$ :data:`SERIES_BELOW` the brackets are summed as series,
+    $K = \lambda^{2/3}/S_p(e^2)$ and $K = \lambda^{-1/3}/S_o(e^2)$, with
+    $S_p(x) = 1 + 2x/5 + 9x^2/35 + \dots$ (from $L = 2\sum_k e^{2k+1}/(2k+1)$) and
+    $S_o(x) = 1 + x/10 + 9x^2/280 + \dots$ (from
+    $\frac{\mathrm d}{\mathrm de}\big[e\sqrt{1-e^2} - (1-2e^2)\arcsin e\big] = 4e\arcsin e$),
+    so $K(0) = 1$ exactly and $K = 1 - 2\Lambda/15 + O(\Lambda^2)$
+    on both sides. $L = 2\operatorname{log1p}(e) + 2\operatorname{atanh}(\Lambda)$
+    ($1 - e^2 = \lambda^{-2}$) and $\arcsin e = \operatorname{atan2}(e, \lambda)$ keep the
+    slender and disk limits accurate.
+
+    $\Lambda$ in $(-1, 1)$. A tensor is evaluated in float64 on its device and returned in
     its dtype and shape; a float gives a float.
 
     Parameters
     ----------
     shape_factor
-        ``Lambda`` in ``(-1, 1)``, a tensor or a float.
+        $\Lambda$ in $(-1, 1)$, a tensor or a float.
 
     Returns
     -------
     torch.Tensor or float
-        ``K(Lambda)``: 1 for the sphere, least (0.9555) at ``Lambda = 0.584``.
+        $K(\Lambda)$: 1 for the sphere, least (0.9555) at $\Lambda = 0.584$.
     """
     if not isinstance(shape_factor, torch.Tensor):
         return float(drag_factor(torch.tensor(float(shape_factor), dtype=torch.float64)))

@@ -1,17 +1,18 @@
-r"""Integrate all swimmers over one decision interval (``K = T_u / dt`` Heun steps).
+r"""Integrate all swimmers over one decision interval ($K = T_u/\delta t$ Heun steps).
 
-The flow enters through a coefficient path ``c(t_k)``, ``k = 0..K``, drawn beforehand so
+The flow enters through a coefficient path $c(t_k)$, $k = 0, \dots, K$, drawn beforehand so
 the kernel itself is deterministic and free of random-number calls:
-``q(x, t_k) = sum_m c_m(t_k) I[Q_m](x)`` (``I`` bilinear periodic interpolation).
+$q(\boldsymbol x, t_k) = \sum_m c_m(t_k)\,I[Q_m](\boldsymbol x)$ ($I$ bilinear periodic
+interpolation).
 
 Three implementations with the same arithmetic:
 
 * ``eager`` – :func:`integrate_interval`, plain torch ops on all swimmers at once (any device;
   the reference);
-* ``fused`` – ``swimrl/physics/kernels/heun_cpu.cpp``, one pass per swimmer over the ``K``
+* ``fused`` – ``swimrl/physics/kernels/heun_cpu.cpp``, one pass per swimmer over the $K$
   steps with everything in registers (CPU; built on first use). Tested against the reference.
 * ``compiled`` – :func:`integrate_interval` traced once by ``torch.compile(fullgraph=True)``
-  (:func:`compiled_interval`): the ``2 K`` stages of gathers and pointwise arithmetic become a
+  (:func:`compiled_interval`): the $2K$ stages of gathers and pointwise arithmetic become a
   handful of generated kernels (Triton on CUDA, C++ on the CPU) instead of ~30 launches per
   stage; no graph break, so the call can sit inside a CUDA-graph capture. The default on CUDA
   (``kernel=auto``); on the CPU the hand-fused kernel is faster (``benchmarks/bench_env.py``:
@@ -45,7 +46,7 @@ def integrate_interval(
     swim_speed: float,
     dt: float,
 ) -> tuple[torch.Tensor, torch.Tensor]:
-    """Advance ``(pos, theta)`` by ``K`` Heun steps of size ``dt`` with ``Lambda`` fixed.
+    r"""Advance ``(pos, theta)`` by $K$ Heun steps of size ``dt`` with $\Lambda$ fixed.
 
     ``table`` is the flow basis ``(F n n, M 5)``, ``coeff_path`` ``(K+1, F, M)`` the
     coefficients at the step times, ``kicks`` ``(K, P)`` rotational-noise increments or None.

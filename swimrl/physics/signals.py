@@ -1,14 +1,19 @@
-r"""The swimmer's signals (paper Sec. II C), in the body frame and in units of ``tau_K``.
+r"""The swimmer's signals (paper Sec. II C), in the body frame and in units of $\tau_K$.
 
-With ``d = x - x_0`` the displacement from the start point, ``e_r = d/|d|`` and
-``e_theta = z x e_r = (-e_{r,y}, e_{r,x})``:
+With $\boldsymbol d = \boldsymbol x - \boldsymbol x_0$ the displacement from the start point,
+$\boldsymbol e_r = \boldsymbol d/|\boldsymbol d|$ and
+$\boldsymbol e_\theta = \hat{\boldsymbol z}\times\boldsymbol e_r = (-e_{r,y}, e_{r,x})$:
 
-* ``n_r = n.e_r``, ``n_theta = n.e_theta = sin(theta - phi)`` (``phi`` the polar angle of ``d``);
-* ``S_nn = n.S.n tau_K``, ``S_np = n.S.p tau_K``, ``omega tau_K``.
+* $n_r = \boldsymbol n\cdot\boldsymbol e_r$,
+  $n_\theta = \boldsymbol n\cdot\boldsymbol e_\theta = \sin(\theta - \phi)$ ($\phi$ the polar
+  angle of $\boldsymbol d$);
+* $S_{nn}\tau_K = \boldsymbol n\cdot\mathbb S\cdot\boldsymbol n\,\tau_K$,
+  $S_{np}\tau_K = \boldsymbol n\cdot\mathbb S\cdot\boldsymbol p\,\tau_K$, $\omega\tau_K$.
 
-At the start point (``|d| = 0``) the polar basis is undefined; swimrl defines
-``e_r := n`` there, i.e. ``n_r = 1``, ``n_theta = 0`` (the swimmer regards its initial heading
-as outward). The same rule applies whenever ``|d| < 1e-12`` in flow units.
+At the start point ($|\boldsymbol d| = 0$) the polar basis is undefined; swimrl defines
+$\boldsymbol e_r := \boldsymbol n$ there, i.e. $n_r = 1$, $n_\theta = 0$ (the swimmer regards
+its initial heading as outward). The same rule applies whenever $|\boldsymbol d| < 10^{-12}$
+in flow units.
 """
 
 from __future__ import annotations
@@ -30,18 +35,19 @@ SHAPE_SIGNAL = "Lambda"
 def compute_signals(
     q: torch.Tensor, theta: torch.Tensor, displacement: torch.Tensor, tau_k: float
 ) -> torch.Tensor:
-    """All five signals ``(n_r, n_theta, S_nn tau_K, S_np tau_K, omega tau_K)`` (Sec. II C).
+    r"""All five signals $(n_r, n_\theta, S_{nn}\tau_K, S_{np}\tau_K, \omega\tau_K)$ (Sec. II C).
 
     Parameters
     ----------
     q
-        Flow channels ``(u_x, u_y, S_xx, S_xy, omega)`` at the swimmers, ``(..., 5)``.
+        Flow channels $(u_x, u_y, S_{xx}, S_{xy}, \omega)$ at the swimmers, ``(..., 5)``.
     theta
         Orientation angles, ``(...)``.
     displacement
-        ``x - x_0``, ``(..., 2)``: its direction is ``e_r`` (``n`` at the start point).
+        $\boldsymbol x - \boldsymbol x_0$, ``(..., 2)``: its direction is $\boldsymbol e_r$
+        ($\boldsymbol n$ at the start point).
     tau_k
-        The flow's ``tau_K``, the unit of the strain and vorticity signals.
+        The flow's $\tau_K$, the unit of the strain and vorticity signals.
 
     Returns
     -------

@@ -1,18 +1,29 @@
 r"""Spheroidal microswimmer dynamics in 2D (paper eqs. ``eq:eom`` and ``eq:thetaDot``).
 
-``dx/dt = u(x, t) + v_s n``,  ``n = (cos theta, sin theta)``,
-``dtheta/dt = omega/2 + Lambda p.S.n``,  ``p = (-sin theta, cos theta)``,
+$$
+\frac{\mathrm d\boldsymbol x}{\mathrm dt} = \boldsymbol u(\boldsymbol x, t) + v_s\,\boldsymbol n,
+\quad \boldsymbol n = (\cos\theta, \sin\theta),
+\qquad
+\frac{\mathrm d\theta}{\mathrm dt} = \frac{\omega}{2}
+ + \Lambda\,\boldsymbol p\cdot\mathbb S\cdot\boldsymbol n,
+\quad \boldsymbol p = (-\sin\theta, \cos\theta),
+$$
 
-with ``p.S.n = S_xy cos 2theta - S_xx sin 2theta`` for the traceless 2D strain. Time
-integration is Heun's method (explicit trapezoidal rule, second order):
+with $\boldsymbol p\cdot\mathbb S\cdot\boldsymbol n = S_{xy}\cos 2\theta - S_{xx}\sin 2\theta$
+for the traceless 2D strain. Time integration is Heun's method (explicit trapezoidal rule,
+second order):
 
-``k1 = f(x_n, t_n)``, ``x~ = x_n + dt k1``, ``k2 = f(x~, t_n + dt)``,
-``x_{n+1} = x_n + dt (k1 + k2)/2``,
+$$
+\boldsymbol k_1 = f(\boldsymbol x_n, t_n),\quad
+\tilde{\boldsymbol x} = \boldsymbol x_n + \delta t\,\boldsymbol k_1,\quad
+\boldsymbol k_2 = f(\tilde{\boldsymbol x}, t_n + \delta t),\quad
+\boldsymbol x_{n+1} = \boldsymbol x_n + \delta t\,(\boldsymbol k_1 + \boldsymbol k_2)/2,
+$$
 
-with ``Lambda`` held over the step. Optional rotational diffusion adds
-``sqrt(2 D_r dt) xi`` (``xi ~ N(0,1)``) to ``theta`` in both predictor and corrector
-(App. "Robustness"); for this additive noise the scheme is the stochastic Heun method,
-strong order 1 and weak order 2.
+with $\Lambda$ held over the step. Optional rotational diffusion adds
+$\sqrt{2D_r\,\delta t}\,\xi$ ($\xi\sim\mathcal N(0,1)$) to $\theta$ in both predictor and
+corrector (App. "Robustness"); for this additive noise the scheme is the stochastic Heun
+method, strong order 1 and weak order 2.
 """
 
 from __future__ import annotations
@@ -25,38 +36,45 @@ Sampler = Callable[[torch.Tensor], torch.Tensor]
 
 
 def strain_np(theta: torch.Tensor, s_xx: torch.Tensor, s_xy: torch.Tensor) -> torch.Tensor:
-    """Body-frame strain ``S_np = n.S.p = S_xy cos 2theta - S_xx sin 2theta``."""
+    r"""Body-frame strain $S_{np} = \boldsymbol n\cdot\mathbb S\cdot\boldsymbol p
+    = S_{xy}\cos 2\theta - S_{xx}\sin 2\theta$."""
     return s_xy * torch.cos(2 * theta) - s_xx * torch.sin(2 * theta)
 
 
 def strain_nn(theta: torch.Tensor, s_xx: torch.Tensor, s_xy: torch.Tensor) -> torch.Tensor:
-    """Body-frame strain ``S_nn = n.S.n = S_xx cos 2theta + S_xy sin 2theta``."""
+    r"""Body-frame strain $S_{nn} = \boldsymbol n\cdot\mathbb S\cdot\boldsymbol n
+    = S_{xx}\cos 2\theta + S_{xy}\sin 2\theta$."""
     return s_xx * torch.cos(2 * theta) + s_xy * torch.sin(2 * theta)
 
 
 def swimmer_rhs(
     q: torch.Tensor, theta: torch.Tensor, shape_factor: torch.Tensor, swim_speed: float
 ) -> tuple[torch.Tensor, torch.Tensor]:
-    """Right-hand side ``(dx/dt, dtheta/dt)`` of the paper's eqs. (1a) and (2).
+    r"""Right-hand side $(\mathrm d\boldsymbol x/\mathrm dt, \mathrm d\theta/\mathrm dt)$ of the
+    paper's eqs. (1a) and (2).
 
-    ``dx/dt = u + v_s (cos theta, sin theta)``;
-    ``dtheta/dt = omega/2 + Lambda (S_xy cos 2theta - S_xx sin 2theta)``.
+    $$
+    \frac{\mathrm d\boldsymbol x}{\mathrm dt} = \boldsymbol u + v_s\,(\cos\theta, \sin\theta),
+    \qquad
+    \frac{\mathrm d\theta}{\mathrm dt} = \frac{\omega}{2}
+     + \Lambda\,(S_{xy}\cos 2\theta - S_{xx}\sin 2\theta).
+    $$
 
     Parameters
     ----------
     q
-        Flow channels ``(u_x, u_y, S_xx, S_xy, omega)`` at the swimmers, ``(P, 5)``.
+        Flow channels $(u_x, u_y, S_{xx}, S_{xy}, \omega)$ at the swimmers, ``(P, 5)``.
     theta
         Orientation angles, ``(P,)``.
     shape_factor
-        ``Lambda`` of each swimmer, ``(P,)`` (or a scalar).
+        $\Lambda$ of each swimmer, ``(P,)`` (or a scalar).
     swim_speed
-        ``v_s`` in the flow's units.
+        $v_s$ in the flow's units.
 
     Returns
     -------
     tuple[torch.Tensor, torch.Tensor]
-        ``dx/dt`` ``(P, 2)`` and ``dtheta/dt`` ``(P,)``.
+        $\mathrm d\boldsymbol x/\mathrm dt$ ``(P, 2)`` and $\mathrm d\theta/\mathrm dt$ ``(P,)``.
     """
     c, s = torch.cos(theta), torch.sin(theta)
     vel = q[:, 0:2] + swim_speed * torch.stack((c, s), -1)
@@ -75,27 +93,27 @@ def heun_step(
     dt: float,
     rot_kick: torch.Tensor | None = None,
 ) -> tuple[torch.Tensor, torch.Tensor]:
-    """One Heun step of ``(x, theta)`` over ``[t, t + dt]``, ``Lambda`` held.
+    r"""One Heun step of $(\boldsymbol x, \theta)$ over $[t, t + \delta t]$, $\Lambda$ held.
 
     Parameters
     ----------
     sample
         ``sample(pos)``: the flow channels ``(P, 5)`` at ``pos`` at the current flow time.
     advance
-        ``advance()``: moves the flow from ``t`` to ``t + dt``, between the two stages.
+        ``advance()``: moves the flow from $t$ to $t + \delta t$, between the two stages.
     pos, theta
-        Positions ``(P, 2)`` and orientation angles ``(P,)`` at ``t``.
+        Positions ``(P, 2)`` and orientation angles ``(P,)`` at $t$.
     shape_factor
-        ``Lambda`` of each swimmer.
+        $\Lambda$ of each swimmer.
     swim_speed, dt
-        ``v_s`` and the step, in the flow's units.
+        $v_s$ and the step $\delta t$, in the flow's units.
     rot_kick
-        The rotational noise increment ``sqrt(2 D_r dt) xi`` of this step (or None).
+        The rotational noise increment $\sqrt{2D_r\,\delta t}\,\xi$ of this step (or None).
 
     Returns
     -------
     tuple[torch.Tensor, torch.Tensor]
-        Positions and angles at ``t + dt``.
+        Positions and angles at $t + \delta t$.
     """
     v1, w1 = swimmer_rhs(sample(pos), theta, shape_factor, swim_speed)
     pos_p = pos + dt * v1

@@ -1,45 +1,82 @@
-r"""Spheroidal microswimmer dynamics in 3D: the paper's eqs. ``eq:eom`` with ``n`` a unit vector.
+r"""Spheroidal microswimmer dynamics in 3D: the paper's eqs. ``eq:eom`` with $\boldsymbol n$ a
+unit vector.
 
-``dx/dt = u(x, t) + v_s n``,
-``dn/dt = Omega n + Lambda (S n - (n.S n) n)``,  ``Omega n = (omega x n)/2``,
+$$
+\frac{\mathrm d\boldsymbol x}{\mathrm dt} = \boldsymbol u(\boldsymbol x, t) + v_s\,\boldsymbol n,
+\qquad
+\frac{\mathrm d\boldsymbol n}{\mathrm dt} = \Omega\boldsymbol n
+ + \Lambda\left[\mathbb S\boldsymbol n
+ - (\boldsymbol n\cdot\mathbb S\boldsymbol n)\,\boldsymbol n\right],
+\qquad
+\Omega\boldsymbol n = \tfrac12\,\boldsymbol\omega\times\boldsymbol n,
+$$
 
-``A_ij = d_j u_i = S_ij + W_ij`` the velocity gradient, ``S = (A + A^T)/2`` the strain rate,
-``W = (A - A^T)/2`` the rotation rate (``W n = (omega x n)/2``, ``omega = curl u``) and
-``Lambda = (lambda^2 - 1)/(lambda^2 + 1)`` the shape factor. Equivalently
-``dn/dt = w x n`` with the angular velocity ``w = omega/2 + Lambda n x (S n)``
-(:func:`angular_velocity`), since ``(n x S n) x n = S n - (n.S n) n`` for ``|n| = 1``.
+$A_{ij} = \partial_j u_i = S_{ij} + W_{ij}$ the velocity gradient,
+$\mathbb S = (\mathbb A + \mathbb A^{\mathsf T})/2$ the strain rate,
+$\mathbb W = (\mathbb A - \mathbb A^{\mathsf T})/2$ the rotation rate
+($\mathbb W\boldsymbol n = \tfrac12\,\boldsymbol\omega\times\boldsymbol n$,
+$\boldsymbol\omega = \nabla\times\boldsymbol u$) and
+$\Lambda = (\lambda^2 - 1)/(\lambda^2 + 1)$ the shape factor. Equivalently
+$\mathrm d\boldsymbol n/\mathrm dt = \boldsymbol w\times\boldsymbol n$ with the angular velocity
+$\boldsymbol w = \tfrac12\,\boldsymbol\omega + \Lambda\,\boldsymbol n\times(\mathbb S\boldsymbol n)$
+(:func:`angular_velocity`), since
+$(\boldsymbol n\times\mathbb S\boldsymbol n)\times\boldsymbol n
+= \mathbb S\boldsymbol n - (\boldsymbol n\cdot\mathbb S\boldsymbol n)\,\boldsymbol n$
+for $|\boldsymbol n| = 1$.
 
 **Flow channels.** A 3D flow gives, at each swimmer, the eleven channels of
-:data:`CHANNELS_3D`: ``q = (u_x, u_y, u_z, S_xx, S_yy, S_xy, S_xz, S_yz, omega_x, omega_y,
-omega_z)``, the strain traceless (``S_zz = -S_xx - S_yy``, incompressible flow). The trace
-would not change ``dn/dt``: ``S -> S + c I`` leaves ``S n - (n.S n) n`` unchanged.
+:data:`CHANNELS_3D`: $q = (u_x, u_y, u_z, S_{xx}, S_{yy}, S_{xy}, S_{xz}, S_{yz}, \omega_x,
+\omega_y, \omega_z)$, the strain traceless ($S_{zz} = -S_{xx} - S_{yy}$, incompressible flow).
+The trace would not change $\mathrm d\boldsymbol n/\mathrm dt$:
+$\mathbb S \to \mathbb S + c\,\mathbb I$ leaves
+$\mathbb S\boldsymbol n - (\boldsymbol n\cdot\mathbb S\boldsymbol n)\,\boldsymbol n$ unchanged.
 
 **Time integration** (:func:`heun_step_3d`). Heun's method of the 2D
-:func:`swimrl.physics.swimmer.heun_step`, with the angle increment ``dt dtheta/dt`` replaced
-by a rotation ``R(phi) n`` (Rodrigues, :func:`rotate`) by the rotation vector ``phi = dt w``:
+:func:`swimrl.physics.swimmer.heun_step`, with the angle increment
+$\delta t\,\mathrm d\theta/\mathrm dt$ replaced by a rotation $R(\boldsymbol\phi)\,\boldsymbol n$
+(Rodrigues, :func:`rotate`) by the rotation vector $\boldsymbol\phi = \delta t\,\boldsymbol w$:
 
-``w1 = w(x_n, n_n, t_n)``, ``x~ = x_n + dt v1``, ``n~ = R(dt w1) n_n``,
-``w2 = w(x~, n~, t_n + dt)``, ``x_{n+1} = x_n + dt (v1 + v2)/2``,
-``n_{n+1} = R(dt (w1 + w2)/2) n_n``,
+$$
+\begin{aligned}
+&\boldsymbol w_1 = \boldsymbol w(\boldsymbol x_n, \boldsymbol n_n, t_n),\quad
+\tilde{\boldsymbol x} = \boldsymbol x_n + \delta t\,\boldsymbol v_1,\quad
+\tilde{\boldsymbol n} = R(\delta t\,\boldsymbol w_1)\,\boldsymbol n_n,\\
+&\boldsymbol w_2 = \boldsymbol w(\tilde{\boldsymbol x}, \tilde{\boldsymbol n}, t_n + \delta t),\quad
+\boldsymbol x_{n+1} = \boldsymbol x_n + \delta t\,(\boldsymbol v_1 + \boldsymbol v_2)/2,\\
+&\boldsymbol n_{n+1} = R\big(\delta t\,(\boldsymbol w_1 + \boldsymbol w_2)/2\big)\,\boldsymbol n_n,
+\end{aligned}
+$$
 
-with ``v = u + v_s n`` and ``Lambda`` held over the step. Second order (tested); ``n`` stays
-a unit vector by construction (it is renormalised after each step against round-off); a
-constant ``omega`` with no strain is integrated exactly; and for motion in a plane
-(``n``, ``u`` in the x-y plane, ``omega`` along z) ``w`` is along z and the step is the 2D
-Heun step of ``theta`` to round-off.
+with $\boldsymbol v = \boldsymbol u + v_s\boldsymbol n$ and $\Lambda$ held over the step. Second
+order (tested); $\boldsymbol n$ stays a unit vector by construction (it is renormalised after
+each step against round-off); a constant $\boldsymbol\omega$ with no strain is integrated
+exactly; and for motion in a plane ($\boldsymbol n$, $\boldsymbol u$ in the $x$-$y$ plane,
+$\boldsymbol\omega$ along $z$) $\boldsymbol w$ is along $z$ and the step is the 2D Heun step of
+$\theta$ to round-off.
 
-**Rotational diffusion** (:func:`rotational_diffusion`) with coefficient ``D_r``: the
-Stratonovich SDE ``dn = (dn/dt) dt + sqrt(2 D_r) (I - n n) o dW`` (Ito:
-``dn = (dn/dt - 2 D_r n) dt + sqrt(2 D_r) (I - n n) dW``), ``W`` a 3D Wiener process, whose
-noise part generates ``D_r`` times the Laplacian on the sphere: ``<n(t).n(0)> = exp(-2 D_r t)``.
-It is split from the drift (Lie splitting): after the Heun step ``n`` is turned by an angle
-``phi`` towards a uniformly random tangent direction, with ``1 - cos phi`` exponentially
-distributed of mean ``a = 1 - exp(-2 D_r dt)``. Then ``E[n'|n] = exp(-2 D_r dt) n`` exactly,
-so the correlation is exact at any ``dt``, and the second moment of ``1 - cos phi`` is the
-heat kernel's to ``O(dt^3)`` (``<P_2(n'.n)> = exp(-6 D_r dt) + a^3``): the noise substep is
-weak second order. The splitting is weak first order in general; it is the symmetric
-(second-order) splitting shifted by half a noise substep, an ``O(D_r dt)`` offset at the
-observation times that does not grow.
+**Rotational diffusion** (:func:`rotational_diffusion`) with coefficient $D_r$: the
+Stratonovich SDE
+
+$$
+\mathrm d\boldsymbol n = \frac{\mathrm d\boldsymbol n}{\mathrm dt}\,\mathrm dt
+ + \sqrt{2D_r}\,(\mathbb I - \boldsymbol n\boldsymbol n)\circ\mathrm d\boldsymbol W
+$$
+
+(Itô:
+$\mathrm d\boldsymbol n = (\mathrm d\boldsymbol n/\mathrm dt - 2D_r\boldsymbol n)\,\mathrm dt +
+\sqrt{2D_r}\,(\mathbb I - \boldsymbol n\boldsymbol n)\,\mathrm d\boldsymbol W$),
+$\boldsymbol W$ a 3D Wiener process, whose noise part generates $D_r$ times the Laplacian on
+the sphere: $\langle\boldsymbol n(t)\cdot\boldsymbol n(0)\rangle = e^{-2D_r t}$.
+It is split from the drift (Lie splitting): after the Heun step $\boldsymbol n$ is turned by
+an angle $\varphi$ towards a uniformly random tangent direction, with $1 - \cos\varphi$
+exponentially distributed of mean $a = 1 - e^{-2D_r\delta t}$. Then
+$E[\boldsymbol n'\,|\,\boldsymbol n] = e^{-2D_r\delta t}\,\boldsymbol n$ exactly, so the
+correlation is exact at any $\delta t$, and the second moment of $1 - \cos\varphi$ is the
+heat kernel's to $O(\delta t^3)$
+($\langle P_2(\boldsymbol n'\cdot\boldsymbol n)\rangle = e^{-6D_r\delta t} + a^3$): the noise
+substep is weak second order. The splitting is weak first order in general; it is the
+symmetric (second-order) splitting shifted by half a noise substep, an $O(D_r\,\delta t)$
+offset at the observation times that does not grow.
 """
 
 from __future__ import annotations
@@ -58,9 +95,11 @@ CHANNELS_3D: tuple[str, ...] = (
 
 
 def channels_from_gradient(u: torch.Tensor, grad: torch.Tensor) -> torch.Tensor:
-    """The channels :data:`CHANNELS_3D` of a velocity ``u`` ``(..., 3)`` and velocity gradient
-    ``grad[..., i, j] = d_j u_i`` ``(..., 3, 3)``: ``S = (A + A^T)/2`` less its trace
-    (``S_zz = -S_xx - S_yy``), ``omega = (A_zy - A_yz, A_xz - A_zx, A_yx - A_xy)``.
+    r"""The channels :data:`CHANNELS_3D` of a velocity ``u`` ``(..., 3)`` and velocity gradient
+    ``grad`` ``(..., 3, 3)``, ``grad[..., i, j]`` $= A_{ij} = \partial_j u_i$:
+    $\mathbb S = (\mathbb A + \mathbb A^{\mathsf T})/2$ less its trace
+    ($S_{zz} = -S_{xx} - S_{yy}$),
+    $\boldsymbol\omega = (A_{zy} - A_{yz}, A_{xz} - A_{zx}, A_{yx} - A_{xy})$.
 
     Returns
     -------
@@ -83,8 +122,8 @@ def channels_from_gradient(u: torch.Tensor, grad: torch.Tensor) -> torch.Tensor:
 
 
 def strain_tensor(q: torch.Tensor) -> torch.Tensor:
-    """The strain rate ``S`` ``(..., 3, 3)`` of channels ``q`` ``(..., 11)``,
-    ``S_zz = -S_xx - S_yy``."""
+    r"""The strain rate $\mathbb S$ ``(..., 3, 3)`` of channels ``q`` ``(..., 11)``,
+    $S_{zz} = -S_{xx} - S_{yy}$."""
     s_xx, s_yy, s_xy, s_xz, s_yz = (q[..., k] for k in range(3, 8))
     rows = (
         torch.stack((s_xx, s_xy, s_xz), -1),
@@ -95,7 +134,8 @@ def strain_tensor(q: torch.Tensor) -> torch.Tensor:
 
 
 def strain_dot(q: torch.Tensor, n: torch.Tensor) -> torch.Tensor:
-    """``S n`` ``(..., 3)`` from channels ``q`` ``(..., 11)`` (``S`` traceless)."""
+    r"""$\mathbb S\boldsymbol n$ ``(..., 3)`` from channels ``q`` ``(..., 11)``
+    ($\mathbb S$ traceless)."""
     s_xx, s_yy, s_xy, s_xz, s_yz = (q[..., k] for k in range(3, 8))
     nx, ny, nz = n[..., 0], n[..., 1], n[..., 2]
     return torch.stack(
@@ -109,8 +149,16 @@ def strain_dot(q: torch.Tensor, n: torch.Tensor) -> torch.Tensor:
 
 
 def angular_velocity(q: torch.Tensor, n: torch.Tensor, shape_factor) -> torch.Tensor:
-    """The angular velocity ``w = omega/2 + Lambda n x (S n)`` of the Jeffery equation, so that
-    ``dn/dt = w x n = (omega x n)/2 + Lambda (S n - (n.S n) n)``.
+    r"""The angular velocity
+    $\boldsymbol w = \tfrac12\,\boldsymbol\omega +
+    \Lambda\,\boldsymbol n\times(\mathbb S\boldsymbol n)$ of the Jeffery equation, so that
+
+    $$
+    \frac{\mathrm d\boldsymbol n}{\mathrm dt} = \boldsymbol w\times\boldsymbol n
+    = \tfrac12\,\boldsymbol\omega\times\boldsymbol n
+    + \Lambda\left[\mathbb S\boldsymbol n
+    - (\boldsymbol n\cdot\mathbb S\boldsymbol n)\,\boldsymbol n\right].
+    $$
 
     Parameters
     ----------
@@ -119,7 +167,7 @@ def angular_velocity(q: torch.Tensor, n: torch.Tensor, shape_factor) -> torch.Te
     n
         Unit orientations, ``(..., 3)``.
     shape_factor
-        ``Lambda``, ``(...)`` or a scalar.
+        $\Lambda$, ``(...)`` or a scalar.
 
     Returns
     -------
@@ -133,10 +181,16 @@ def angular_velocity(q: torch.Tensor, n: torch.Tensor, shape_factor) -> torch.Te
 def swimmer_rhs_3d(
     q: torch.Tensor, n: torch.Tensor, shape_factor, swim_speed: float
 ) -> tuple[torch.Tensor, torch.Tensor]:
-    """Right-hand side ``(dx/dt, dn/dt)`` of the 3D equations of motion:
+    r"""Right-hand side $(\mathrm d\boldsymbol x/\mathrm dt, \mathrm d\boldsymbol n/\mathrm dt)$ of
+    the 3D equations of motion:
 
-    ``dx/dt = u + v_s n``;
-    ``dn/dt = (omega x n)/2 + Lambda (S n - (n.S n) n)``.
+    $$
+    \frac{\mathrm d\boldsymbol x}{\mathrm dt} = \boldsymbol u + v_s\,\boldsymbol n,
+    \qquad
+    \frac{\mathrm d\boldsymbol n}{\mathrm dt} = \tfrac12\,\boldsymbol\omega\times\boldsymbol n
+    + \Lambda\left[\mathbb S\boldsymbol n
+    - (\boldsymbol n\cdot\mathbb S\boldsymbol n)\,\boldsymbol n\right].
+    $$
 
     Parameters
     ----------
@@ -145,14 +199,15 @@ def swimmer_rhs_3d(
     n
         Unit orientations, ``(..., 3)``.
     shape_factor
-        ``Lambda`` of each swimmer, ``(...)`` (or a scalar).
+        $\Lambda$ of each swimmer, ``(...)`` (or a scalar).
     swim_speed
-        ``v_s`` in the flow's units.
+        $v_s$ in the flow's units.
 
     Returns
     -------
     tuple[torch.Tensor, torch.Tensor]
-        ``dx/dt`` and ``dn/dt``, both ``(..., 3)``.
+        $\mathrm d\boldsymbol x/\mathrm dt$ and $\mathrm d\boldsymbol n/\mathrm dt$, both
+        ``(..., 3)``.
     """
     lam = torch.as_tensor(shape_factor, dtype=n.dtype, device=n.device).unsqueeze(-1)
     sn = strain_dot(q, n)
@@ -162,11 +217,17 @@ def swimmer_rhs_3d(
 
 
 def rotate(n: torch.Tensor, phi: torch.Tensor) -> torch.Tensor:
-    """``R(phi) n``: ``n`` turned by the angle ``|phi|`` about ``phi`` (Rodrigues),
+    r"""$R(\boldsymbol\phi)\,\boldsymbol n$: $\boldsymbol n$ turned by the angle $|\boldsymbol\phi|$
+    about $\boldsymbol\phi$ (Rodrigues),
 
-    ``R(phi) n = n + (sin a / a) phi x n + ((1 - cos a)/a^2) phi x (phi x n)``, ``a = |phi|``,
+    $$
+    R(\boldsymbol\phi)\,\boldsymbol n = \boldsymbol n
+    + \frac{\sin a}{a}\,\boldsymbol\phi\times\boldsymbol n
+    + \frac{1 - \cos a}{a^2}\,\boldsymbol\phi\times(\boldsymbol\phi\times\boldsymbol n),
+    \qquad a = |\boldsymbol\phi|,
+    $$
 
-    with ``(1 - cos a)/a^2 = sinc^2(a/2)/2``, accurate at small ``a``.
+    with $(1 - \cos a)/a^2 = \operatorname{sinc}^2(a/2)/2$, accurate at small $a$.
     """
     a = phi.norm(dim=-1, keepdim=True)
     s1 = torch.sinc(a / math.pi)
@@ -176,26 +237,32 @@ def rotate(n: torch.Tensor, phi: torch.Tensor) -> torch.Tensor:
 
 
 def rotational_diffusion(n: torch.Tensor, xi: torch.Tensor, d_r_dt: float) -> torch.Tensor:
-    """One noise substep of rotational diffusion on the sphere over ``dt`` (``d_r_dt = D_r dt``).
+    r"""One noise substep of rotational diffusion on the sphere over $\delta t$
+    (``d_r_dt`` $= D_r\,\delta t$).
 
-    With ``xi ~ N(0, I_3)``, ``xi_p = xi - (xi.n) n`` (a 2D standard normal in the tangent
-    plane: uniform direction, ``|xi_p|^2/2 ~ Exp(1)``), ``a = 1 - exp(-2 D_r dt)`` and
-    ``y = min(a |xi_p|^2/2, 2) = 1 - cos phi``:
+    With $\boldsymbol\xi\sim\mathcal N(0, \mathbb I_3)$,
+    $\boldsymbol\xi_\perp = \boldsymbol\xi - (\boldsymbol\xi\cdot\boldsymbol n)\,\boldsymbol n$
+    (a 2D standard normal in the tangent plane: uniform direction,
+    $|\boldsymbol\xi_\perp|^2/2\sim\mathrm{Exp}(1)$), $a = 1 - e^{-2D_r\delta t}$ and
+    $y = \min(a|\boldsymbol\xi_\perp|^2/2,\ 2) = 1 - \cos\varphi$:
 
-    ``n' = (1 - y) n + sqrt(a/2) sqrt(2 - y) xi_p``,
+    $$
+    \boldsymbol n' = (1 - y)\,\boldsymbol n + \sqrt{a/2}\,\sqrt{2 - y}\;\boldsymbol\xi_\perp,
+    $$
 
-    i.e. ``n' = n cos phi + e sin phi`` with ``e = xi_p/|xi_p|`` (``|n'| = 1`` exactly) and
-    ``E[n'|n] = exp(-2 D_r dt) n`` (up to the cut at ``y = 2``, of probability
-    ``exp(-2/a)``).
+    i.e. $\boldsymbol n' = \boldsymbol n\cos\varphi + \boldsymbol e\sin\varphi$ with
+    $\boldsymbol e = \boldsymbol\xi_\perp/|\boldsymbol\xi_\perp|$ ($|\boldsymbol n'| = 1$ exactly)
+    and $E[\boldsymbol n'\,|\,\boldsymbol n] = e^{-2D_r\delta t}\,\boldsymbol n$ (up to the cut at
+    $y = 2$, of probability $e^{-2/a}$).
 
     Parameters
     ----------
     n
         Unit orientations, ``(..., 3)``.
     xi
-        Standard normal numbers, ``(..., 3)``.
+        Standard normal numbers $\boldsymbol\xi$, ``(..., 3)``.
     d_r_dt
-        ``D_r dt``.
+        $D_r\,\delta t$.
     """
     a = -math.expm1(-2.0 * d_r_dt)
     xi_p = xi - (xi * n).sum(-1, keepdim=True) * n
@@ -214,33 +281,35 @@ def heun_step_3d(
     rot_noise: torch.Tensor | None = None,
     rot_diffusion: float = 0.0,
 ) -> tuple[torch.Tensor, torch.Tensor]:
-    """One Heun step of ``(x, n)`` over ``[t, t + dt]``, ``Lambda`` held (module docstring):
-
-    ``x~ = x + dt v1``, ``n~ = R(dt w1) n``; ``x' = x + dt (v1 + v2)/2``,
-    ``n' = R(dt (w1 + w2)/2) n``; then, with noise, :func:`rotational_diffusion`; then
-    ``n' / |n'|``.
+    r"""One Heun step of $(\boldsymbol x, \boldsymbol n)$ over $[t, t + \delta t]$, $\Lambda$ held
+    (module docstring):
+    $\tilde{\boldsymbol x} = \boldsymbol x + \delta t\,\boldsymbol v_1$,
+    $\tilde{\boldsymbol n} = R(\delta t\,\boldsymbol w_1)\,\boldsymbol n$;
+    $\boldsymbol x' = \boldsymbol x + \delta t\,(\boldsymbol v_1 + \boldsymbol v_2)/2$,
+    $\boldsymbol n' = R\big(\delta t\,(\boldsymbol w_1 + \boldsymbol w_2)/2\big)\,\boldsymbol n$;
+    then, with noise, :func:`rotational_diffusion`; then $\boldsymbol n'/|\boldsymbol n'|$.
 
     Parameters
     ----------
     sample
         ``sample(pos)``: the flow channels ``(..., 11)`` at ``pos`` at the current flow time.
     advance
-        ``advance()``: moves the flow from ``t`` to ``t + dt``, between the two stages.
+        ``advance()``: moves the flow from $t$ to $t + \delta t$, between the two stages.
     pos, n
-        Positions and unit orientations ``(..., 3)`` at ``t``.
+        Positions and unit orientations ``(..., 3)`` at $t$.
     shape_factor
-        ``Lambda`` of each swimmer, ``(...)`` (or a scalar).
+        $\Lambda$ of each swimmer, ``(...)`` (or a scalar).
     swim_speed, dt
-        ``v_s`` and the step, in the flow's units.
+        $v_s$ and the step $\delta t$, in the flow's units.
     rot_noise
         Standard normal numbers ``(..., 3)`` of this step's rotational noise (or None).
     rot_diffusion
-        ``D_r`` in the flow's units (used with ``rot_noise``).
+        $D_r$ in the flow's units (used with ``rot_noise``).
 
     Returns
     -------
     tuple[torch.Tensor, torch.Tensor]
-        Positions and orientations at ``t + dt``.
+        Positions and orientations at $t + \delta t$.
     """
     q1 = sample(pos)
     v1 = q1[..., 0:3] + swim_speed * n

@@ -1,13 +1,17 @@
-"""Pseudospectral DNS of forced 2D Navier-Stokes turbulence (paper eq. NSE, App. A).
+r"""Pseudospectral DNS of forced 2D Navier-Stokes turbulence (paper eq. NSE, App. A).
 
-Vorticity form on the bi-periodic box ``[0, L)^2`` (``L = 2 pi``), batched over realisations:
+Vorticity form on the bi-periodic box $[0, L)^2$ ($L = 2\pi$), batched over realisations:
 
-``d_t omega + u . grad omega = nu lap omega - alpha (-lap)^{-h} omega + f``,
-``u = (d_y psi, -d_x psi)``, ``omega = d_x u_y - d_y u_x = -lap psi``.
+$$
+\partial_t\omega + \boldsymbol u\cdot\nabla\omega
+= \nu\nabla^2\omega - \alpha(-\nabla^2)^{-h}\omega + f,\qquad
+\boldsymbol u = (\partial_y\psi, -\partial_x\psi),\quad
+\omega = \partial_x u_y - \partial_y u_x = -\nabla^2\psi.
+$$
 
 Modules (FourierFlows.jl style): :mod:`.grid` (rfft2 wavenumbers, 2/3 mask), :mod:`.params`,
 :mod:`.state` (``omega_hat`` and the kinematics, :func:`flow_channels`), :mod:`.equation`
-(``L(k)`` and the advection term), :mod:`.forcing`, :mod:`.stepper` (ETDRK4, :class:`DNS`),
+($L(k)$ and the advection term), :mod:`.forcing`, :mod:`.stepper` (ETDRK4, :class:`DNS`),
 :mod:`.diagnostics`, :mod:`.spinup` (spin-up and measured scales), :mod:`.store` (zarr layout and
 writer), :mod:`.integrity` (chunk checksums, checked reads, the per-snapshot finite / rms
 checks), :mod:`.verify` (a whole store checked, ``swimrl-dns-verify``), :mod:`.run` (the run

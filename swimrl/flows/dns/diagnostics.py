@@ -1,18 +1,27 @@
-"""Diagnostics of a DNS state, as plain functions of ``(grid, omega_hat)``.
+r"""Diagnostics of a DNS state, as plain functions of ``(grid, omega_hat)``.
 
 Space means are evaluated in spectral space with Parseval's identity
-``<a b> = sum_k w_k Re(a_hat_k conj(b_hat_k)) / N^4`` (half plane, weights ``w_k``,
-:meth:`SpectralGrid.mean_product`), in float64. Every function reduces the two spatial axes and
-returns one value per realisation (shape ``(B,)``) unless stated otherwise.
+$\langle ab\rangle = \sum_k w_k\,\mathrm{Re}(\hat a_k\overline{\hat b_k})/N^4$ (half plane,
+weights $w_k$, :meth:`SpectralGrid.mean_product`), in float64. Every function reduces the two
+spatial axes and returns one value per realisation (shape ``(B,)``) unless stated otherwise.
 
-Budgets (``L = -nu k^2 - alpha k^{-2h}``; the nonlinearity conserves ``E`` and ``Z``)::
+Budgets ($L = -\nu k^2 - \alpha k^{-2h}$; the nonlinearity conserves $E$ and $Z$):
 
-    dE/dt = P_E - D_E - F_E,   P_E = <psi f>,   D_E = nu <omega^2> = 2 nu Z,
-                               F_E = alpha sum w k^{-2h} |omega_hat|^2 / (k^2 N^4)
-    dZ/dt = P_Z - D_Z - F_Z,   P_Z = <omega f>, D_Z = nu <|grad omega|^2> = 2 nu P,
-                               F_Z = alpha sum w k^{-2h} |omega_hat|^2 / N^4
+$$
+\begin{aligned}
+\frac{\mathrm dE}{\mathrm dt} &= P_E - D_E - F_E, &
+P_E &= \langle\psi f\rangle, &
+D_E &= \nu\langle\omega^2\rangle = 2\nu Z,\\
+&& F_E &= \alpha\sum w\,k^{-2h}|\hat\omega|^2/(k^2N^4), &&\\
+\frac{\mathrm dZ}{\mathrm dt} &= P_Z - D_Z - F_Z, &
+P_Z &= \langle\omega f\rangle, &
+D_Z &= \nu\langle|\nabla\omega|^2\rangle = 2\nu P,\\
+&& F_Z &= \alpha\sum w\,k^{-2h}|\hat\omega|^2/N^4 &&
+\end{aligned}
+$$
 
-with ``E = <|u|^2>/2``, ``Z = <omega^2>/2``, palinstrophy ``P = <|grad omega|^2>/2``.
+with $E = \langle|\boldsymbol u|^2\rangle/2$, $Z = \langle\omega^2\rangle/2$, palinstrophy
+$P = \langle|\nabla\omega|^2\rangle/2$.
 """
 
 from __future__ import annotations
@@ -41,47 +50,48 @@ def _hypo(grid: SpectralGrid, h: float) -> torch.Tensor:
 
 
 def energy(grid: SpectralGrid, omega_hat: torch.Tensor) -> torch.Tensor:
-    """``E = <|u|^2>/2 = sum w |omega_hat|^2 / (2 k^2 N^4)``."""
+    r"""$E = \langle|\boldsymbol u|^2\rangle/2 = \sum w\,|\hat\omega|^2/(2k^2N^4)$."""
     return 0.5 * _sum(grid, grid.inv_k2, omega_hat)
 
 
 def enstrophy(grid: SpectralGrid, omega_hat: torch.Tensor) -> torch.Tensor:
-    """``Z = <omega^2>/2 = sum w |omega_hat|^2 / (2 N^4)``."""
+    r"""$Z = \langle\omega^2\rangle/2 = \sum w\,|\hat\omega|^2/(2N^4)$."""
     return 0.5 * _sum(grid, 1.0, omega_hat)
 
 
 def palinstrophy(grid: SpectralGrid, omega_hat: torch.Tensor) -> torch.Tensor:
-    """``P = <|grad omega|^2>/2 = sum w k^2 |omega_hat|^2 / (2 N^4)``."""
+    r"""$P = \langle|\nabla\omega|^2\rangle/2 = \sum w\,k^2|\hat\omega|^2/(2N^4)$."""
     return 0.5 * _sum(grid, grid.k2, omega_hat)
 
 
 def energy_dissipation_rate(grid, params: DNSParams, omega_hat: torch.Tensor) -> torch.Tensor:
-    """Viscous ``D_E = nu <|grad u|^2> = 2 nu Z``."""
+    r"""Viscous $D_E = \nu\langle|\nabla\boldsymbol u|^2\rangle = 2\nu Z$."""
     return 2 * params.nu * enstrophy(grid, omega_hat)
 
 
 def enstrophy_dissipation_rate(grid, params: DNSParams, omega_hat: torch.Tensor) -> torch.Tensor:
-    """Viscous ``D_Z = nu <|grad omega|^2> = 2 nu P`` (= enstrophy flux ``eta`` when steady)."""
+    r"""Viscous $D_Z = \nu\langle|\nabla\omega|^2\rangle = 2\nu P$ (= enstrophy flux $\eta$ when
+    steady)."""
     return 2 * params.nu * palinstrophy(grid, omega_hat)
 
 
 def energy_friction_rate(grid, params: DNSParams, omega_hat: torch.Tensor) -> torch.Tensor:
-    """Hypo-friction ``F_E = alpha sum w k^{-2h} |omega_hat|^2 / (k^2 N^4)``."""
+    r"""Hypo-friction $F_E = \alpha\sum w\,k^{-2h}|\hat\omega|^2/(k^2N^4)$."""
     return params.alpha * _sum(grid, _hypo(grid, params.hypo_power) * grid.inv_k2.double(),
                                omega_hat)
 
 
 def enstrophy_friction_rate(grid, params: DNSParams, omega_hat: torch.Tensor) -> torch.Tensor:
-    """Hypo-friction ``F_Z = alpha sum w k^{-2h} |omega_hat|^2 / N^4``."""
+    r"""Hypo-friction $F_Z = \alpha\sum w\,k^{-2h}|\hat\omega|^2/N^4$."""
     return params.alpha * _sum(grid, _hypo(grid, params.hypo_power), omega_hat)
 
 
 def scalar_summary(grid: SpectralGrid, params: DNSParams, omega_hat: torch.Tensor) -> dict:
-    """All scalar diagnostics from one pass over ``p_k = w_k |omega_hat_k|^2 / N^4``.
+    r"""All scalar diagnostics from one pass over $p_k = w_k|\hat\omega_k|^2/N^4$.
 
-    ``E = sum p/(2k^2)``, ``Z = sum p/2``, ``P = sum k^2 p/2``, ``D_E = 2 nu Z``,
-    ``D_Z = 2 nu P``, ``F_E = alpha sum k^{-2h} p/k^2``, ``F_Z = alpha sum k^{-2h} p``,
-    ``u_rms = (2E)^{1/2}`` and ``tau_K = (2Z)^{-1/2}`` (2D identities, tested against the
+    $E = \sum p/(2k^2)$, $Z = \sum p/2$, $P = \sum k^2p/2$, $D_E = 2\nu Z$,
+    $D_Z = 2\nu P$, $F_E = \alpha\sum k^{-2h}p/k^2$, $F_Z = \alpha\sum k^{-2h}p$,
+    $u_\mathrm{rms} = (2E)^{1/2}$ and $\tau_K = (2Z)^{-1/2}$ (2D identities, tested against the
     definitions). Values are ``(B,)`` float64 tensors.
     """
     p = omega_hat.to(torch.complex128).abs() ** 2 * (grid.weight.double() / float(grid.n) ** 4)
@@ -99,11 +109,12 @@ def scalar_summary(grid: SpectralGrid, params: DNSParams, omega_hat: torch.Tenso
 
 
 def energy_injection_rate(grid, omega_hat: torch.Tensor, f_hat: torch.Tensor) -> torch.Tensor:
-    """``P_E = <psi f> = sum w Re(psi_hat conj(f_hat)) / N^4`` at the given ``omega_hat``.
+    r"""$P_E = \langle\psi f\rangle = \sum w\,\mathrm{Re}(\hat\psi\overline{\hat f})/N^4$ at the
+    given ``omega_hat``.
 
     For a step with forcing held constant, evaluate it at the mid-step vorticity
-    ``(omega_n + omega_{n+1})/2`` (Stratonovich/midpoint), which makes the forcing
-    contribution to ``E_{n+1} - E_n`` exact; its ensemble mean is ``epsilon``.
+    $(\omega_n + \omega_{n+1})/2$ (Stratonovich/midpoint), which makes the forcing
+    contribution to $E_{n+1} - E_n$ exact; its ensemble mean is $\epsilon$.
     """
     psi = omega_hat.to(torch.complex128) * grid.inv_k2.double()
     prod = (psi * f_hat.to(torch.complex128).conj()).real * grid.weight.double()
@@ -111,21 +122,25 @@ def energy_injection_rate(grid, omega_hat: torch.Tensor, f_hat: torch.Tensor) ->
 
 
 def enstrophy_injection_rate(grid, omega_hat: torch.Tensor, f_hat: torch.Tensor) -> torch.Tensor:
-    """``P_Z = <omega f> = sum w Re(omega_hat conj(f_hat)) / N^4`` (midpoint, as above)."""
+    r"""$P_Z = \langle\omega f\rangle = \sum w\,\mathrm{Re}(\hat\omega\overline{\hat f})/N^4$
+    (midpoint, as above)."""
     w = omega_hat.to(torch.complex128)
     prod = (w * f_hat.to(torch.complex128).conj()).real * grid.weight.double()
     return prod.sum(dim=(-2, -1)) / float(grid.n) ** 4
 
 
 def u_rms(grid: SpectralGrid, omega_hat: torch.Tensor) -> torch.Tensor:
-    """``u_rms = <u . u>^{1/2} = (sum w (|u_x_hat|^2 + |u_y_hat|^2) / N^4)^{1/2}`` (Sec. II B)."""
+    r"""$u_\mathrm{rms} = \langle\boldsymbol u\cdot\boldsymbol u\rangle^{1/2}
+    = \big(\sum w\,(|\hat u_x|^2 + |\hat u_y|^2)/N^4\big)^{1/2}$ (Sec. II B)."""
     ux, uy = velocity_hat(grid, omega_hat.to(torch.complex128))
     return (_sum(grid, 1.0, ux) + _sum(grid, 1.0, uy)).sqrt()
 
 
 def tau_k(grid: SpectralGrid, omega_hat: torch.Tensor) -> torch.Tensor:
-    """Kolmogorov time ``tau_K = <d_i u_j d_i u_j>^{-1/2} = <omega^2>^{-1/2} = (2Z)^{-1/2}``
-    (paper Sec. II B; the middle equality holds for 2D incompressible flow on a periodic box).
+    r"""Kolmogorov time
+    $\tau_K = \langle\partial_i u_j\,\partial_i u_j\rangle^{-1/2} = \langle\omega^2\rangle^{-1/2}
+    = (2Z)^{-1/2}$ (paper Sec. II B; the middle equality holds for 2D incompressible flow on a
+    periodic box).
     """
     return (2 * enstrophy(grid, omega_hat)) ** -0.5
 
@@ -151,11 +166,12 @@ def _shell_sum(grid: SpectralGrid, density: torch.Tensor) -> tuple[torch.Tensor,
 def energy_spectrum(
     grid: SpectralGrid, omega_hat: torch.Tensor
 ) -> tuple[torch.Tensor, torch.Tensor]:
-    """Isotropic spectrum ``E(k_j) = sum_{|k| in shell j} w |omega_hat|^2 / (2 k^2 N^4) / dk``.
+    r"""Isotropic spectrum
+    $E(k_j) = \sum_{|\boldsymbol k|\in\text{shell }j} w\,|\hat\omega|^2/(2k^2N^4)/\delta k$.
 
-    Shells ``(j - 1/2) dk <= |k| < (j + 1/2) dk``, ``dk = 2 pi / L``; returns ``(k_j, E)`` with
-    ``E`` ``(B, n_shells)`` and ``sum_j E(k_j) dk = E``. Shells with ``j > K`` (the 2/3 cutoff)
-    are only partially populated (corners of the square truncation).
+    Shells $(j - 1/2)\,\delta k \le |\boldsymbol k| < (j + 1/2)\,\delta k$, $\delta k = 2\pi/L$;
+    returns $(k_j, E)$ with $E$ ``(B, n_shells)`` and $\sum_j E(k_j)\,\delta k = E$. Shells with
+    $j > K$ (the 2/3 cutoff) are only partially populated (corners of the square truncation).
     """
     dk = 2 * math.pi / grid.length
     dens = 0.5 * omega_hat.to(torch.complex128).abs() ** 2 * (grid.weight * grid.inv_k2).double()
@@ -164,10 +180,12 @@ def energy_spectrum(
 
 
 def spectral_fluxes(grid: SpectralGrid, omega_hat: torch.Tensor) -> tuple[torch.Tensor, ...]:
-    """Nonlinear fluxes through ``|k|``: ``Pi_E(k) = -sum_{|k'| <= k} T_E``, same for ``Z``.
+    r"""Nonlinear fluxes through $|\boldsymbol k|$:
+    $\Pi_E(k) = -\sum_{|\boldsymbol k'|\le k} T_E$, same for $Z$.
 
-    ``T_Z(k') = w Re(conj(omega_hat) N_hat)/N^4``, ``T_E = T_Z / k'^2``, ``N`` the de-aliased
-    advection term. Returns ``(k, Pi_E, Pi_Z)``; ``Pi_Z ~ eta`` in the direct cascade range.
+    $T_Z(\boldsymbol k') = w\,\mathrm{Re}(\overline{\hat\omega}\hat N)/N^4$,
+    $T_E = T_Z/k'^2$, $N$ the de-aliased advection term. Returns $(k, \Pi_E, \Pi_Z)$;
+    $\Pi_Z \sim \eta$ in the direct cascade range.
     """
     n_hat = Advection(grid)(omega_hat)[0].to(torch.complex128)
     w = omega_hat.to(torch.complex128)
@@ -195,12 +213,13 @@ def standardized_pdf(
 
 
 def gaussian_pdf(z: torch.Tensor) -> torch.Tensor:
-    """Standard normal density ``exp(-z^2/2) / sqrt(2 pi)``."""
+    r"""Standard normal density $\exp(-z^2/2)/\sqrt{2\pi}$."""
     return torch.exp(-0.5 * z**2) / math.sqrt(2 * math.pi)
 
 
 def moments(x: torch.Tensor) -> dict[str, float]:
-    """Standardised moments: ``std``, skewness ``<z^3>``, flatness ``<z^4>`` (3 if Gaussian)."""
+    r"""Standardised moments: ``std``, skewness $\langle z^3\rangle$, flatness
+    $\langle z^4\rangle$ (3 if Gaussian)."""
     x = x.detach().double().reshape(-1)
     z = x - x.mean()
     std = z.pow(2).mean().sqrt()

@@ -1,18 +1,30 @@
-"""The vorticity equation split into its stiff linear part and the advective nonlinearity.
+r"""The vorticity equation split into its stiff linear part and the advective nonlinearity.
 
-``d_t omega_hat = L(k) omega_hat + N(omega_hat) + f_hat``  with
+$$
+\partial_t\hat\omega = L(k)\,\hat\omega + N(\hat\omega) + \hat f
+$$
 
-``L(k) = -nu k^2 - alpha k^{-2h}``  (viscosity ``nu lap`` and hypo-friction
-``-alpha (-lap)^{-h}``; ``L(0) = 0``, the ``k = 0`` mode being identically zero) and
+with
 
-``N(omega_hat) = -P_K FFT[u . grad omega] = -P_K (i k_x FFT[u_x omega] + i k_y FFT[u_y omega])``
+$$
+L(k) = -\nu k^2 - \alpha k^{-2h}
+$$
 
-(divergence form, ``div u = 0``; ``P_K`` is the 2/3-rule projection of
-:mod:`swimrl.flows.dns.grid`). With ``u = (d_y psi, -d_x psi)`` one has
-``u . grad omega = -J(psi, omega)``, ``J(a, b) = d_x a d_y b - d_y a d_x b``; with the
-geophysical stream function ``psi_g = -psi`` this is the usual ``+J(psi_g, omega)``.
-The truncated nonlinearity conserves energy ``sum |omega_hat|^2/k^2`` and enstrophy
-``sum |omega_hat|^2`` exactly (Galerkin truncation), so only ``L`` and ``f`` change them.
+(viscosity $\nu\nabla^2$ and hypo-friction $-\alpha(-\nabla^2)^{-h}$; $L(0) = 0$, the $k = 0$
+mode being identically zero) and
+
+$$
+N(\hat\omega) = -P_K\,\mathrm{FFT}[\boldsymbol u\cdot\nabla\omega]
+= -P_K\big(ik_x\,\mathrm{FFT}[u_x\omega] + ik_y\,\mathrm{FFT}[u_y\omega]\big)
+$$
+
+(divergence form, $\nabla\cdot\boldsymbol u = 0$; $P_K$ is the 2/3-rule projection of
+:mod:`swimrl.flows.dns.grid`). With $\boldsymbol u = (\partial_y\psi, -\partial_x\psi)$ one
+has $\boldsymbol u\cdot\nabla\omega = -J(\psi, \omega)$,
+$J(a, b) = \partial_x a\,\partial_y b - \partial_y a\,\partial_x b$; with the geophysical
+stream function $\psi_g = -\psi$ this is the usual $+J(\psi_g, \omega)$. The truncated
+nonlinearity conserves energy $\sum|\hat\omega|^2/k^2$ and enstrophy $\sum|\hat\omega|^2$
+exactly (Galerkin truncation), so only $L$ and $f$ change them.
 """
 
 from __future__ import annotations
@@ -24,7 +36,7 @@ from swimrl.flows.dns.params import DNSParams
 
 
 def linear_operator(grid: SpectralGrid, params: DNSParams) -> torch.Tensor:
-    """``L(k) = -nu k^2 - alpha k^{-2h}`` on the spectral grid, ``L(0) = 0``; float64, CPU.
+    r"""$L(k) = -\nu k^2 - \alpha k^{-2h}$ on the spectral grid, $L(0) = 0$; float64, CPU.
 
     Kept in float64 so that the exponential-integrator coefficients are computed accurately.
     """
@@ -34,28 +46,35 @@ def linear_operator(grid: SpectralGrid, params: DNSParams) -> torch.Tensor:
 
 
 class Advection:
-    """The de-aliased nonlinear term ``N(omega_hat) = -P_K FFT[u . grad omega]``.
+    r"""The de-aliased nonlinear term
+    $N(\hat\omega) = -P_K\,\mathrm{FFT}[\boldsymbol u\cdot\nabla\omega]$.
 
     Two algebraically identical forms (``form``):
 
     * ``"basdevant"`` (default, 4 FFTs: 2 inverse, 2 forward; Basdevant 1983). With
-      ``div u = 0``, ``u . grad omega = d_x d_y (v^2 - u^2) + (d_x^2 - d_y^2)(u v)``, so
+      $\nabla\cdot\boldsymbol u = 0$,
+      $\boldsymbol u\cdot\nabla\omega = \partial_x\partial_y(v^2 - u^2) +
+      (\partial_x^2 - \partial_y^2)(uv)$, so
 
-      ``N_hat = P_K [k_x k_y FFT(v^2 - u^2) + (k_x^2 - k_y^2) FFT(u v)]``;
+        $$
+        \hat N = P_K\big[k_xk_y\,\mathrm{FFT}(v^2 - u^2)
+        + (k_x^2 - k_y^2)\,\mathrm{FFT}(uv)\big];
+        $$
 
     * ``"divergence"`` (5 FFTs: 3 inverse, 2 forward):
-      ``N_hat = -P_K (i k_x FFT[u omega] + i k_y FFT[v omega])``.
+      $\hat N = -P_K\big(ik_x\,\mathrm{FFT}[u\omega] + ik_y\,\mathrm{FFT}[v\omega]\big)$.
 
-    Here ``(u, v) = (u_x, u_y) = IFFT(i k_y psi_hat, -i k_x psi_hat)`` with
-    ``psi_hat = omega_hat / k^2``. Both products are of fields band-limited to the retained
+    Here $(u, v) = (u_x, u_y) = \mathrm{IFFT}(ik_y\hat\psi, -ik_x\hat\psi)$ with
+    $\hat\psi = \hat\omega/k^2$. Both products are of fields band-limited to the retained
     modes, so with the 2/3 rule both forms give the same alias-free Galerkin truncation (equal
     to round-off; tested).
 
     ``__call__(omega_hat, want_speed)`` returns ``(N_hat, speed)`` where
-    ``speed = max_x (|u_x| + |u_y|)`` per realisation (``(B,)``) if ``want_speed`` else
-    ``None``; the stepper uses it for the CFL check. The multipliers are precomputed as complex
-    tensors with the 2/3 mask folded in (complex-by-complex products are the fastest on CPU),
-    and each field is transformed on its own (faster than one stacked transform on CPU).
+    $\mathrm{speed} = \max_{\boldsymbol x}(|u_x| + |u_y|)$ per realisation (``(B,)``) if
+    ``want_speed`` else ``None``; the stepper uses it for the CFL check. The multipliers are
+    precomputed as complex tensors with the 2/3 mask folded in (complex-by-complex products
+    are the fastest on CPU), and each field is transformed on its own (faster than one stacked
+    transform on CPU).
     """
 
     FORMS = ("basdevant", "divergence")

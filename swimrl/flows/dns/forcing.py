@@ -1,22 +1,39 @@
-"""Forcing: Gaussian, white in time, isotropic, peaked at ``|k| = k_f`` (and a steady one).
+r"""Forcing: Gaussian, white in time, isotropic, peaked at $|\boldsymbol k| = k_f$ (and a
+steady one).
 
-Stochastic forcing. In continuous time ``f_hat(k, t) dt = sigma_k dW_k(t)`` with independent
-complex Wiener processes (Hermitian, ``dW_{-k} = conj(dW_k)``, ``E|dW_k|^2 = dt``) and
+Stochastic forcing. In continuous time
+$\hat f(\boldsymbol k, t)\,\mathrm dt = \sigma_k\,\mathrm dW_{\boldsymbol k}(t)$ with independent
+complex Wiener processes (Hermitian,
+$\mathrm dW_{-\boldsymbol k} = \overline{\mathrm dW_{\boldsymbol k}}$,
+$E|\mathrm dW_{\boldsymbol k}|^2 = \mathrm dt$) and
 
-``sigma_k^2 = 2 epsilon N^4 F(k) / S``,  ``F(k) = exp(-(|k| - k_f)^2 / (2 delta_f^2))``,
-``S = sum_k F(k) / k^2`` (full ``k`` plane, retained modes, ``k != 0``).
+$$
+\sigma_k^2 = \frac{2\epsilon N^4 F(k)}{S},\qquad
+F(k) = \exp\!\Big(-\frac{(|\boldsymbol k| - k_f)^2}{2\delta_f^2}\Big),\qquad
+S = \sum_{\boldsymbol k} \frac{F(k)}{k^2}
+$$
 
-Because the noise is additive (``sigma`` does not depend on ``omega``) Ito and Stratonovich
-readings of the SDE coincide, and the energy ``E = sum |omega_hat|^2 / (2 k^2 N^4)`` obeys
-(Ito) ``dE = [...] dt + sum Re(psi_hat^* sigma dW)/N^4 + (1/2) sum sigma_k^2 / (k^2 N^4) dt``.
+(full $\boldsymbol k$ plane, retained modes, $\boldsymbol k \ne 0$).
+
+Because the noise is additive ($\sigma$ does not depend on $\omega$) Itô and Stratonovich
+readings of the SDE coincide, and the energy $E = \sum|\hat\omega|^2/(2k^2N^4)$ obeys (Itô)
+
+$$
+\mathrm dE = [\dots]\,\mathrm dt + \sum \mathrm{Re}(\hat\psi^*\sigma\,\mathrm dW)/N^4
++ \tfrac12\sum \sigma_k^2/(k^2N^4)\,\mathrm dt.
+$$
+
 The martingale term has zero mean whatever the state, so the mean injection rate is
 
-``<P> = sum_k sigma_k^2 / (2 k^2 N^4) = epsilon``  exactly, independent of the flow;
+$$
+\langle P\rangle = \sum_{\boldsymbol k}\frac{\sigma_k^2}{2k^2N^4} = \epsilon
+$$
 
-likewise the enstrophy injection rate is ``sum_k sigma_k^2 / (2 N^4) = epsilon <k^2>_F``.
-Discretisation: one draw ``xi_k`` (standard complex Gaussian, ``E|xi|^2 = 1``) per time step,
-``f_hat = sigma_k xi_k / sqrt(dt)`` held constant over all stages of the step, so the step adds
-``sigma_k xi_k sqrt(dt)`` (Wiener increment) to ``omega_hat``.
+exactly, independent of the flow; likewise the enstrophy injection rate is
+$\sum_{\boldsymbol k}\sigma_k^2/(2N^4) = \epsilon\,\langle k^2\rangle_F$.
+Discretisation: one draw $\xi_k$ (standard complex Gaussian, $E|\xi|^2 = 1$) per time step,
+$\hat f = \sigma_k\xi_k/\sqrt{\delta t}$ held constant over all stages of the step, so the step
+adds $\sigma_k\xi_k\sqrt{\delta t}$ (Wiener increment) to $\hat\omega$.
 
 Random numbers: each realisation has its own ``torch.Generator`` (CPU, seeded by its seed); the
 draws are made in float64 on the CPU and then moved/cast, so a seed gives the same forcing
@@ -34,9 +51,10 @@ from swimrl.flows.dns.params import DNSParams
 
 
 def forcing_shape(grid: SpectralGrid, k_f: float, width: float) -> torch.Tensor:
-    """``F(k) = exp(-(|k| - k_f)^2 / (2 width^2))`` on retained ``k != 0`` modes, 0 elsewhere.
+    r"""$F(k) = \exp(-(|\boldsymbol k| - k_f)^2/(2w^2))$, $w$ = ``width``, on retained
+    $\boldsymbol k \ne 0$ modes, 0 elsewhere.
 
-    Values below ``1e-12`` are set to 0 (they define the forced-mode support). float64, CPU.
+    Values below $10^{-12}$ are set to 0 (they define the forced-mode support). float64, CPU.
     """
     k2 = grid.k2.double().cpu()
     f = torch.exp(-((k2.sqrt() - k_f) ** 2) / (2 * width**2))
@@ -45,9 +63,9 @@ def forcing_shape(grid: SpectralGrid, k_f: float, width: float) -> torch.Tensor:
 
 
 class StochasticForcing:
-    """White-in-time Gaussian forcing injecting energy at the mean rate ``epsilon``.
+    r"""White-in-time Gaussian forcing injecting energy at the mean rate $\epsilon$.
 
-    ``draw(dt)`` returns ``f_hat`` ``(B, N, N//2+1)`` = ``sigma xi / sqrt(dt)`` for the
+    ``draw(dt)`` returns $\hat f$ ``(B, N, N//2+1)`` $= \sigma\xi/\sqrt{\delta t}$ for the
     current step, advancing each realisation's generator.
     """
 
@@ -85,26 +103,26 @@ class StochasticForcing:
         return len(self.generators)
 
     def injection_rate(self) -> float:
-        """Mean energy injection ``sum_k w_k sigma_k^2 / (2 k^2 N^4)`` (= ``epsilon``)."""
+        r"""Mean energy injection $\sum_k w_k\sigma_k^2/(2k^2N^4)$ ($= \epsilon$)."""
         g = self.grid
         s2 = self.sigma_full**2 * g.weight.double().cpu() * g.inv_k2.double().cpu()
         return float(s2.sum()) / (2 * float(g.n) ** 4)
 
     def enstrophy_injection_rate(self) -> float:
-        """Mean enstrophy injection ``sum_k w_k sigma_k^2 / (2 N^4)`` (``~ epsilon k_f^2``)."""
+        r"""Mean enstrophy injection $\sum_k w_k\sigma_k^2/(2N^4)$ ($\sim\epsilon k_f^2$)."""
         g = self.grid
         s2 = self.sigma_full**2 * g.weight.double().cpu()
         return float(s2.sum()) / (2 * float(g.n) ** 4)
 
     def draw_xi(self) -> torch.Tensor:
-        """Standard complex Gaussians ``xi`` ``(B, M)`` (float64 CPU), one row per generator."""
+        r"""Standard complex Gaussians $\xi$ ``(B, M)`` (float64 CPU), one row per generator."""
         rows = [torch.randn(2, self.n_modes, generator=g, dtype=torch.float64)
                 for g in self.generators]
         z = torch.stack(rows)  # (B, 2, M)
         return torch.complex(z[:, 0], z[:, 1]) / math.sqrt(2.0)
 
     def draw(self, dt: float) -> torch.Tensor:
-        """``f_hat = sigma xi / sqrt(dt)`` on the spectral grid, Hermitian on ``m_x = 0``."""
+        r"""$\hat f = \sigma\xi/\sqrt{\delta t}$ on the spectral grid, Hermitian on $m_x = 0$."""
         g = self.grid
         vals = (self.draw_xi() * self._sigma / math.sqrt(dt)).to(g.device, g.complex_dtype)
         nh = g.n // 2 + 1
@@ -128,11 +146,11 @@ class StochasticForcing:
 
 
 class SteadyForcing:
-    """Deterministic forcing ``f_hat`` (constant in time), e.g. for manufactured solutions."""
+    r"""Deterministic forcing $\hat f$ (constant in time), e.g. for manufactured solutions."""
 
     def __init__(self, f_hat: torch.Tensor):
         self.f_hat = f_hat
 
     def draw(self, dt: float) -> torch.Tensor:
-        """The fixed ``f_hat`` (``dt`` is ignored)."""
+        r"""The fixed $\hat f$ (``dt`` is ignored)."""
         return self.f_hat

@@ -1,18 +1,22 @@
-"""Spectral grid of the DNS: real-FFT wavenumbers and the 2/3 de-aliasing mask.
+r"""Spectral grid of the DNS: real-FFT wavenumbers and the 2/3 de-aliasing mask.
 
-Physical grid: ``N x N`` nodes ``x_j = j L/N``, ``j = 0..N-1``, arrays indexed ``[..., iy, ix]``
-(the node grid :class:`swimrl.flows.grid.PeriodicGrid` shared with every flow). Spectral
-grid: ``torch.fft.rfft2`` layout, ``(N, N//2 + 1)`` indexed ``[..., m_y, m_x]`` with ``m_y`` in
-FFT order ``0..N/2-1, -N/2..-1`` and ``m_x = 0..N/2``; the wavenumbers are ``k = 2 pi m / L``.
+Physical grid: $N\times N$ nodes $x_j = jL/N$, $j = 0, \dots, N-1$, arrays indexed
+``[..., iy, ix]`` (the node grid :class:`swimrl.flows.grid.PeriodicGrid` shared with every
+flow). Spectral grid: ``torch.fft.rfft2`` layout, ``(N, N//2 + 1)`` indexed
+``[..., m_y, m_x]`` with $m_y$ in FFT order $0, \dots, N/2-1, -N/2, \dots, -1$ and
+$m_x = 0, \dots, N/2$; the wavenumbers are $k = 2\pi m/L$.
 
 De-aliasing (Orszag's 2/3 rule, square truncation): the retained modes are exactly
 
-``3 |m_x| < N  and  3 |m_y| < N``,  i.e. ``|m_x|, |m_y| <= K = floor((N - 1) / 3)``
+$$
+3|m_x| < N \ \text{ and } \ 3|m_y| < N,\qquad
+\text{i.e.}\quad |m_x|, |m_y| \le K = \lfloor (N - 1)/3 \rfloor
+$$
 
-(``K = 170`` for ``N = 512``, ``K = 21`` for ``N = 64``). The product of two fields band-limited
-to ``|m| <= K`` has ``|m| <= 2K``; its aliases land at ``|m| >= N - 2K > K``, outside the
+($K = 170$ for $N = 512$, $K = 21$ for $N = 64$). The product of two fields band-limited
+to $|m| \le K$ has $|m| \le 2K$; its aliases land at $|m| \ge N - 2K > K$, outside the
 retained set, so the truncated quadratic term is alias-free (exact Galerkin truncation). The
-Nyquist row/column ``m = -N/2`` / ``m_x = N/2`` is always discarded.
+Nyquist row/column $m = -N/2$ / $m_x = N/2$ is always discarded.
 """
 
 from __future__ import annotations
@@ -26,18 +30,18 @@ from swimrl.flows.grid import PeriodicGrid
 
 
 def dealias_cutoff(n: int) -> int:
-    """Largest retained integer wavenumber ``K = floor((N - 1)/3)`` (modes ``3|m| < N``)."""
+    r"""Largest retained integer wavenumber $K = \lfloor (N - 1)/3\rfloor$ (modes $3|m| < N$)."""
     return (n - 1) // 3
 
 
 @dataclass
 class SpectralGrid:
-    """Bi-periodic square box of side ``length`` with ``n x n`` nodes, on ``device``/``dtype``.
+    r"""Bi-periodic square box of side ``length`` with $n\times n$ nodes, on ``device``/``dtype``.
 
     Attributes (all tensors broadcast against ``(..., n, n//2 + 1)`` spectral arrays):
-    ``kx`` ``(1, n//2+1)``, ``ky`` ``(n, 1)``, ``k2 = kx^2 + ky^2``, ``inv_k2 = 1/k2`` (0 at
-    ``k = 0``), ``mask`` (bool, the 2/3 rule above), ``weight`` (1 on the ``m_x = 0`` and
-    ``m_x = N/2`` columns, 2 elsewhere: Parseval weight of the half plane).
+    ``kx`` ``(1, n//2+1)``, ``ky`` ``(n, 1)``, ``k2`` $= k_x^2 + k_y^2$, ``inv_k2`` $= 1/k^2$
+    (0 at $k = 0$), ``mask`` (bool, the 2/3 rule above), ``weight`` (1 on the $m_x = 0$ and
+    $m_x = N/2$ columns, 2 elsewhere: Parseval weight of the half plane).
     """
 
     n: int
@@ -78,17 +82,17 @@ class SpectralGrid:
     # -- geometry -------------------------------------------------------------------------
     @property
     def spacing(self) -> float:
-        """Grid spacing ``dx = L / N`` (of :attr:`nodes`)."""
+        r"""Grid spacing $\delta x = L/N$ (of :attr:`nodes`)."""
         return self.nodes.spacing
 
     @property
     def cutoff(self) -> int:
-        """Largest retained integer wavenumber ``K`` (see module docstring)."""
+        """Largest retained integer wavenumber $K$ (see module docstring)."""
         return dealias_cutoff(self.n)
 
     @property
     def k_max(self) -> float:
-        """Largest retained wavenumber component ``k_max = 2 pi K / L``."""
+        r"""Largest retained wavenumber component $k_\mathrm{max} = 2\pi K/L$."""
         return 2 * math.pi * self.cutoff / self.length
 
     @property
@@ -102,11 +106,11 @@ class SpectralGrid:
         return torch.complex128 if self.dtype == torch.float64 else torch.complex64
 
     def coords(self) -> torch.Tensor:
-        """Node coordinates ``x_j = j L / N`` (1D, float64, CPU)."""
+        """Node coordinates $x_j = jL/N$ (1D, float64, CPU)."""
         return self.nodes.coords()
 
     def k_magnitude(self) -> torch.Tensor:
-        """``|k| = (k_x^2 + k_y^2)^{1/2}`` on the spectral grid."""
+        r"""$|\boldsymbol k| = (k_x^2 + k_y^2)^{1/2}$ on the spectral grid."""
         return self.k2.sqrt()
 
     # -- transforms -----------------------------------------------------------------------
@@ -123,7 +127,9 @@ class SpectralGrid:
         return f_hat * self.mask
 
     def mean_product(self, a_hat: torch.Tensor, b_hat: torch.Tensor) -> torch.Tensor:
-        """Space mean ``<a b> = sum_k w_k Re(a_k conj(b_k)) / N^4`` (Parseval, half plane).
+        r"""Space mean
+        $\langle ab\rangle = \sum_k w_k\,\mathrm{Re}(\hat a_k\overline{\hat b_k})/N^4$
+        (Parseval, half plane).
 
         Reduces the last two axes; exact for real fields given in rfft2 layout.
         """

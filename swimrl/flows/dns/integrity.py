@@ -9,30 +9,39 @@ bytes changed on disk fails to decode; :func:`read` and :func:`read_snapshots` t
 one :class:`~swimrl.errors.IntegrityError` line naming the store, the array and the snapshot
 (time) index. Stores written before (:func:`has_checksum` false) read as before, unverified.
 
-*Snapshot checks* (:class:`SnapshotCheck`, on the packed coefficients ``c_k`` of a snapshot,
-``omega = sum_k c_k exp(i k.x)`` over the full plane, stored on the half plane ``m_x >= 0``
-with the Parseval weight ``w_k = 1`` (``m_x = 0``), ``2`` (``m_x > 0``))::
+*Snapshot checks* (:class:`SnapshotCheck`, on the packed coefficients $c_{\boldsymbol k}$ of
+a snapshot, $\omega = \sum_{\boldsymbol k} c_{\boldsymbol k}\exp(i\boldsymbol k\cdot\boldsymbol x)$
+over the full plane, stored on the half plane $m_x \ge 0$ with the Parseval weight
+$w_{\boldsymbol k} = 1$ ($m_x = 0$), $2$ ($m_x > 0$)):
 
-    u_rms(t)^2 = <u.u> = sum_k w_k |c_k|^2 / |k|^2,     E = <u.u>/2,
-    Z = <omega^2>/2 = sum_k w_k |c_k|^2 / 2,
+$$
+\begin{aligned}
+u_\mathrm{rms}(t)^2 &= \langle\boldsymbol u\cdot\boldsymbol u\rangle
+= \sum_{\boldsymbol k} w_{\boldsymbol k}\,|c_{\boldsymbol k}|^2/|\boldsymbol k|^2,\qquad
+E = \langle\boldsymbol u\cdot\boldsymbol u\rangle/2,\\
+Z &= \langle\omega^2\rangle/2 = \sum_{\boldsymbol k} w_{\boldsymbol k}\,|c_{\boldsymbol k}|^2/2,
+\end{aligned}
+$$
 
-each snapshot must be finite and have ``u_rms(t) / u_rms`` in ``[1/F, F]``,
-``F =`` :data:`RMS_FACTOR` ``= 5``, ``u_rms`` the store's attribute (the average over its
-snapshots). Finite coefficients with a bounded ``u_rms(t)`` give finite decoded channels
-(``|c_k| <= |k| F u_rms``), so the decoded fields need no second pass.
+each snapshot must be finite and have $u_\mathrm{rms}(t)/u_\mathrm{rms}$ in $[1/F, F]$,
+$F$ = :data:`RMS_FACTOR` $= 5$, $u_\mathrm{rms}$ the store's attribute (the average over its
+snapshots). Finite coefficients with a bounded $u_\mathrm{rms}(t)$ give finite decoded
+channels ($|c_{\boldsymbol k}| \le |\boldsymbol k|\,F\,u_\mathrm{rms}$), so the decoded fields
+need no second pass.
 
-Why 5. The energy of a stored run fluctuates on the friction time ``1/alpha``: measured on a
-128^2 run with the production physics (``nu = 1.6e-3``, ``dt = 2e-3``, spin-up 12, 3000
-snapshots over 42 time units = 21 friction times), ``u_rms(t)/u_rms`` spans
-``[0.763, 1.286]``, relative standard deviation 9.6 % (the five 512^2 runs: 7.8-9.5 %,
-``docs/results/dns_checks/``); a factor 3 would hold those with a margin of 2.3. But a run
-stored after a spin-up shorter than the friction time is still growing through its stored
-window: the test suite's 32^2 runs (spin-up 0.2 from rest, ``1/alpha = 2``) reach down to
-``u_rms(t)/u_rms = 0.31`` over 40 snapshots and 0.24 over 100 (seeds 0-2). ``F = 5`` accepts
-those and still refuses what corruption produces: a NaN, a zeroed or lost chunk (rms 0), a
-wrong normalisation (a factor ``N^2``), a ``u_rms`` attribute off by 10 (a stationary run's
-snapshots then sit at 0.076-0.13 or 7.6-12.9 times it). The check costs one weighted sum over
-the ``(2K+1)(K+1)`` stored coefficients: 0.26 ms at 512^2 against 21 ms for the decode.
+Why 5. The energy of a stored run fluctuates on the friction time $1/\alpha$: measured on a
+$128^2$ run with the production physics ($\nu = 1.6\times10^{-3}$, $\delta t = 2\times10^{-3}$,
+spin-up 12, 3000 snapshots over 42 time units = 21 friction times),
+$u_\mathrm{rms}(t)/u_\mathrm{rms}$ spans $[0.763, 1.286]$, relative standard deviation 9.6 %
+(the five $512^2$ runs: 7.8-9.5 %, ``docs/results/dns_checks/``); a factor 3 would hold those
+with a margin of 2.3. But a run stored after a spin-up shorter than the friction time is still
+growing through its stored window: the test suite's $32^2$ runs (spin-up 0.2 from rest,
+$1/\alpha = 2$) reach down to $u_\mathrm{rms}(t)/u_\mathrm{rms} = 0.31$ over 40 snapshots and
+0.24 over 100 (seeds 0-2). $F = 5$ accepts those and still refuses what corruption produces: a
+NaN, a zeroed or lost chunk (rms 0), a wrong normalisation (a factor $N^2$), a ``u_rms``
+attribute off by 10 (a stationary run's snapshots then sit at 0.076-0.13 or 7.6-12.9 times
+it). The check costs one weighted sum over the $(2K+1)(K+1)$ stored coefficients: 0.26 ms at
+$512^2$ against 21 ms for the decode.
 """
 
 from __future__ import annotations
@@ -138,20 +147,20 @@ class SnapshotCheck:
 
     @property
     def bounds(self) -> tuple[float, float] | None:
-        """Allowed rms velocity ``[u_rms/F, F u_rms]``; None without a finite ``u_rms``
-        attribute (then only finiteness is checked)."""
+        r"""Allowed rms velocity $[u_\mathrm{rms}/F, F\,u_\mathrm{rms}]$; None without a finite
+        ``u_rms`` attribute (then only finiteness is checked)."""
         if not math.isfinite(self.u_rms):
             return None
         return self.u_rms / self.factor, self.u_rms * self.factor
 
     def energy_enstrophy(self, c: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """``E = sum w |c|^2 / (2 k^2)``, ``Z = sum w |c|^2 / 2`` per snapshot (float64)."""
+        r"""$E = \sum w\,|c|^2/(2k^2)$, $Z = \sum w\,|c|^2/2$ per snapshot (float64)."""
         p2 = np.abs(c.astype(np.complex128)) ** 2
         return (0.5 * (p2 * self.weight_inv_k2.numpy()).sum((-2, -1)),
                 0.5 * (p2 * self.weight.numpy()).sum((-2, -1)))
 
     def rms(self, c: torch.Tensor) -> torch.Tensor:
-        """``u_rms(t) = (sum w |c|^2 / k^2)^{1/2}`` per snapshot (NaN/inf if ``c`` is not
+        r"""$u_\mathrm{rms}(t) = (\sum w\,|c|^2/k^2)^{1/2}$ per snapshot (NaN/inf if ``c`` is not
         finite), on the device of ``c``."""
         w = self._dev.get(c.device)
         if w is None:

@@ -1,11 +1,14 @@
-"""Parameters of the 2D Navier-Stokes DNS (paper eq. NSE, vorticity form).
+r"""Parameters of the 2D Navier-Stokes DNS (paper eq. NSE, vorticity form).
 
-``d_t omega + u . grad omega = nu lap omega - alpha (-lap)^{-h} omega + f``
+$$
+\partial_t\omega + \boldsymbol u\cdot\nabla\omega
+= \nu\nabla^2\omega - \alpha(-\nabla^2)^{-h}\omega + f
+$$
 
-with ``nu`` the viscosity, ``alpha`` the hypo-friction coefficient and ``h = hypo_power``
-(``h = 0`` is the paper's linear friction ``-alpha u``), ``f`` the white-in-time forcing that
-injects energy at the mean rate ``epsilon``, peaked at ``|k| = k_f`` with Gaussian width
-``forcing_width``. The defaults are read from ``conf/solver/dns.yaml`` (``dtype`` and
+with $\nu$ the viscosity, $\alpha$ the hypo-friction coefficient and $h$ = ``hypo_power``
+($h = 0$ is the paper's linear friction $-\alpha\boldsymbol u$), $f$ the white-in-time forcing
+that injects energy at the mean rate $\epsilon$, peaked at $|\boldsymbol k| = k_f$ with
+Gaussian width ``forcing_width``. The defaults are read from ``conf/solver/dns.yaml`` (``dtype`` and
 ``device``: ``conf/dns.yaml``; :mod:`swimrl.conf_values`); ``docs/dns.md`` derives them.
 """
 
@@ -25,14 +28,14 @@ DTYPES: dict[str, torch.dtype] = {"float32": torch.float32, "float64": torch.flo
 
 @dataclass(frozen=True)
 class DNSParams:
-    """Physical and numerical parameters; validated on construction.
+    r"""Physical and numerical parameters; validated on construction.
 
-    Keys: ``n`` grid points per side, ``length`` box side ``L``, ``nu`` viscosity, ``alpha``
-    hypo-friction coefficient, ``hypo_power`` ``h`` in ``(-lap)^{-h}``, ``epsilon`` mean energy
+    Keys: ``n`` grid points per side, ``length`` box side $L$, ``nu`` viscosity, ``alpha``
+    hypo-friction coefficient, ``hypo_power`` $h$ in $(-\nabla^2)^{-h}$, ``epsilon`` mean energy
     injection rate, ``k_f`` forcing wavenumber, ``forcing_width`` Gaussian width of the forcing
-    spectrum in ``|k|``, ``dt`` time step, ``dtype`` ``"float32"``/``"float64"``, ``device``
-    torch device string, ``cfl_max`` CFL limit of the stepper, ``cfl_every`` steps between CFL
-    checks.
+    spectrum in $|\boldsymbol k|$, ``dt`` time step, ``dtype`` ``"float32"``/``"float64"``,
+    ``device`` torch device string, ``cfl_max`` CFL limit of the stepper, ``cfl_every`` steps
+    between CFL checks.
     """
 
     n: int = yaml_value("solver/dns", "dns.n")

@@ -1,10 +1,12 @@
-"""A DNS run stored for replay: spin-up to a steady state, then snapshots (``swimrl-dns``).
+r"""A DNS run stored for replay: spin-up to a steady state, then snapshots (``swimrl-dns``).
 
 Phases (all resumable from the zarr store, see :mod:`swimrl.flows.dns.store`):
 
 1. spin-up for ``spinup_time`` from ``init`` (rest or a random field); over its last
-   ``measure_time`` the time averages ``u_rms = <u.u>^{1/2}`` and
-   ``tau_K = <d_i u_j d_i u_j>^{-1/2}`` are measured from samples every ``diag_every`` steps
+   ``measure_time`` the time averages
+   $u_\mathrm{rms} = \langle\boldsymbol u\cdot\boldsymbol u\rangle^{1/2}$ and
+   $\tau_K = \langle\partial_i u_j\,\partial_i u_j\rangle^{-1/2}$ are measured from samples
+   every ``diag_every`` steps
    (:mod:`swimrl.flows.dns.spinup`);
 2. storing: ``store_every = max(1, round(interval_tau_k * tau_K / dt))`` solver steps between
    snapshots (``dt_store = store_every * dt``), ``n_times`` snapshots of ``omega_hat``;
@@ -97,7 +99,9 @@ RESUME_KEYS = ("n", "length", "nu", "alpha", "hypo_power", "epsilon", "k_f", "fo
 
 
 def sample(dns: DNS) -> dict[str, float]:
-    """Diagnostics of realisation 0: ``t, E, Z``, the rates, ``<u.u> = 2E``, ``<A:A> = 2Z``."""
+    r"""Diagnostics of realisation 0: $t, E, Z$, the rates,
+    $\langle\boldsymbol u\cdot\boldsymbol u\rangle = 2E$,
+    $\langle\mathbb A:\mathbb A\rangle = 2Z$."""
     s = {k: float(v[0]) for k, v in diag.scalar_summary(dns.grid, dns.params,
                                                         dns.state.omega_hat[:1]).items()}
     return {**s, "t": dns.state.step * dns.params.dt, "u2": 2 * s["energy"],

@@ -2,13 +2,18 @@ r"""Spin-up to a statistically steady state, and the reference scales measured o
 
 A run is stepped for ``steps = max(1, round(time / dt))`` solver steps; over the last
 ``measure_steps = min(steps, max(1, round(measure_time / dt)))`` of them, every
-``sample_every`` steps, the energy ``E`` and enstrophy ``Z`` are sampled (averaged over the
+``sample_every`` steps, the energy $E$ and enstrophy $Z$ are sampled (averaged over the
 realisations) and time-averaged:
 
-``u_rms = <u.u>^{1/2} = <2E>^{1/2}``,  ``tau_K = <d_i u_j d_i u_j>^{-1/2} = <2Z>^{-1/2}``
+$$
+u_\mathrm{rms} = \langle\boldsymbol u\cdot\boldsymbol u\rangle^{1/2} = \langle 2E\rangle^{1/2},
+\qquad
+\tau_K = \langle\partial_i u_j\,\partial_i u_j\rangle^{-1/2} = \langle 2Z\rangle^{-1/2}
+$$
 
-(2D: ``<d_i u_j d_i u_j> = <omega^2>``). ``swimrl-dns`` (:mod:`swimrl.flows.dns.run`) and
-the live DNS flow (:class:`swimrl.flows.sources.LiveDNS`) use the same schedule and meter.
+(2D: $\langle\partial_i u_j\,\partial_i u_j\rangle = \langle\omega^2\rangle$). ``swimrl-dns``
+(:mod:`swimrl.flows.dns.run`) and the live DNS flow (:class:`swimrl.flows.sources.LiveDNS`)
+use the same schedule and meter.
 """
 
 from __future__ import annotations
@@ -45,14 +50,16 @@ class SpinupSchedule:
 
 
 def energy_sample(dns: DNS) -> dict[str, float]:
-    """``<u.u> = 2E`` and ``<A:A> = 2Z`` of the current state, averaged over realisations."""
+    r"""$\langle\boldsymbol u\cdot\boldsymbol u\rangle = 2E$ and
+    $\langle\mathbb A:\mathbb A\rangle = 2Z$ of the current state, averaged over realisations."""
     s = diag.scalar_summary(dns.grid, dns.params, dns.state.omega_hat)
     return {"u2": float((2 * s["energy"]).mean()), "grad2": float((2 * s["enstrophy"]).mean())}
 
 
 @dataclass
 class ScaleMeter:
-    """Running sums of ``<u.u>`` and ``<A:A>`` samples -> ``u_rms`` and ``tau_K``."""
+    r"""Running sums of $\langle\boldsymbol u\cdot\boldsymbol u\rangle$ and
+    $\langle\mathbb A:\mathbb A\rangle$ samples $\to$ $u_\mathrm{rms}$ and $\tau_K$."""
 
     u2: float = 0.0
     grad2: float = 0.0
@@ -65,7 +72,8 @@ class ScaleMeter:
         self.count += 1
 
     def scales(self) -> dict[str, float]:
-        """``u_rms = (sum u2 / n)^{1/2}``, ``tau_k = (sum grad2 / n)^{-1/2}``."""
+        r"""``u_rms`` $= (\sum u_2/n)^{1/2}$, ``tau_k`` $= (\sum \mathrm{grad}_2/n)^{-1/2}$
+        ($u_2$, $\mathrm{grad}_2$ the samples, $n$ their count)."""
         c = max(self.count, 1.0)
         return {"u_rms": (self.u2 / c) ** 0.5, "tau_k": (self.grad2 / c) ** -0.5}
 

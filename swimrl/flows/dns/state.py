@@ -1,17 +1,24 @@
-"""DNS state (the vorticity ``omega_hat``) and the kinematics derived from it.
+r"""DNS state (the vorticity ``omega_hat``) and the kinematics derived from it.
 
 Sign convention (the one of the paper's stochastic flow and of :mod:`swimrl.flows.fields`):
 
-``u = (d_y psi, -d_x psi)``,  ``omega = d_x u_y - d_y u_x = -lap psi``
+$$
+\boldsymbol u = (\partial_y\psi, -\partial_x\psi),\qquad
+\omega = \partial_x u_y - \partial_y u_x = -\nabla^2\psi
+$$
 
-so in Fourier space (``omega_hat = rfft2(omega)``, unnormalised)
+so in Fourier space ($\hat\omega = \mathrm{rfft2}(\omega)$, unnormalised)
 
-``psi_hat = omega_hat / k^2``,  ``u_x_hat = i k_y psi_hat``,  ``u_y_hat = -i k_x psi_hat``,
-``S_xx_hat = i k_x u_x_hat = -k_x k_y psi_hat``,
-``S_xy_hat = (i k_y u_x_hat + i k_x u_y_hat)/2 = (k_x^2 - k_y^2) psi_hat / 2``
+$$
+\begin{aligned}
+&\hat\psi = \hat\omega/k^2,\qquad \hat u_x = ik_y\hat\psi,\qquad \hat u_y = -ik_x\hat\psi,\\
+&\hat S_{xx} = ik_x\hat u_x = -k_xk_y\hat\psi,\\
+&\hat S_{xy} = (ik_y\hat u_x + ik_x\hat u_y)/2 = (k_x^2 - k_y^2)\,\hat\psi/2
+\end{aligned}
+$$
 
-(``S_yy = -S_xx``). The ``k = 0`` mode of ``omega`` is zero (periodic box), and the mean flow is
-zero (``u_hat(0) = 0``).
+($S_{yy} = -S_{xx}$). The $k = 0$ mode of $\omega$ is zero (periodic box), and the mean flow
+is zero ($\hat{\boldsymbol u}(0) = 0$).
 """
 
 from __future__ import annotations
@@ -42,15 +49,16 @@ class DNSState:
 
 
 def zero_state(grid: SpectralGrid, batch: int = 1) -> DNSState:
-    """Fluid at rest: ``omega_hat = 0`` for ``batch`` realisations."""
+    r"""Fluid at rest: $\hat\omega = 0$ for ``batch`` realisations."""
     shape = (batch, *grid.spectral_shape)
     return DNSState(torch.zeros(shape, dtype=grid.complex_dtype, device=grid.device))
 
 
 def state_from_vorticity(grid: SpectralGrid, omega: torch.Tensor) -> DNSState:
-    """State from node values ``omega`` ``(B, N, N)``: ``omega_hat = mask * rfft2(omega)``.
+    r"""State from node values ``omega`` ``(B, N, N)``:
+    $\hat\omega = \mathrm{mask}\cdot\mathrm{rfft2}(\omega)$.
 
-    The ``k = 0`` mode is removed (zero mean vorticity on a periodic box).
+    The $k = 0$ mode is removed (zero mean vorticity on a periodic box).
     """
     if omega.dim() == 2:
         omega = omega[None]
@@ -65,11 +73,13 @@ def random_state(
     energy: float,
     k_peak: float,
 ) -> DNSState:
-    """Random initial condition ``omega_hat = mask * k exp(-(k/k_peak)^2) * rfft2(white noise)``.
+    r"""Random initial condition
+    $\hat\omega = \mathrm{mask}\cdot k\exp(-(k/k_\mathrm{peak})^2)
+    \cdot\mathrm{rfft2}(\text{white noise})$.
 
-    Its energy spectrum is ``E(k) ~ k exp(-2 (k/k_peak)^2)``. One realisation per seed (drawn
-    in float64 on the CPU, so the same seed gives the same field for any dtype/device), rescaled
-    to the energy ``E = <|u|^2>/2 = energy``.
+    Its energy spectrum is $E(k) \sim k\exp(-2(k/k_\mathrm{peak})^2)$. One realisation per seed
+    (drawn in float64 on the CPU, so the same seed gives the same field for any dtype/device),
+    rescaled to the energy $E = \langle|\boldsymbol u|^2\rangle/2$ = ``energy``.
     """
     cpu = SpectralGrid(grid.n, grid.length, "cpu", torch.float64)
     k = cpu.k_magnitude()
@@ -87,18 +97,19 @@ def random_state(
 
 
 def streamfunction_hat(grid: SpectralGrid, omega_hat: torch.Tensor) -> torch.Tensor:
-    """``psi_hat = omega_hat / k^2`` (``omega = -lap psi``; 0 at ``k = 0``)."""
+    r"""$\hat\psi = \hat\omega/k^2$ ($\omega = -\nabla^2\psi$; 0 at $k = 0$)."""
     return omega_hat * grid.inv_k2
 
 
 def velocity_hat(grid: SpectralGrid, omega_hat: torch.Tensor) -> tuple[torch.Tensor, torch.Tensor]:
-    """``(u_x_hat, u_y_hat) = (i k_y psi_hat, -i k_x psi_hat)``."""
+    r"""$(\hat u_x, \hat u_y) = (ik_y\hat\psi, -ik_x\hat\psi)$."""
     psi = streamfunction_hat(grid, omega_hat)
     return 1j * grid.ky * psi, -1j * grid.kx * psi
 
 
 def channels_hat(grid: SpectralGrid, omega_hat: torch.Tensor) -> torch.Tensor:
-    """Spectral channels ``(B, 5, N, N//2+1)``: ``u_x, u_y, S_xx, S_xy, omega`` (formulas above)."""
+    r"""Spectral channels ``(B, 5, N, N//2+1)``: $u_x, u_y, S_{xx}, S_{xy}, \omega$ (formulas
+    above)."""
     psi = streamfunction_hat(grid, omega_hat)
     kx, ky = grid.kx, grid.ky
     return torch.stack(
@@ -118,14 +129,15 @@ def flow_channels(
     grid: SpectralGrid | None = None,
     cutoff: int | None = None,
 ) -> torch.Tensor:
-    """Node values of ``(u_x, u_y, S_xx, S_xy, omega)``, shape ``(B, N, N, 5)``, ``[b, iy, ix, c]``.
+    r"""Node values of $(u_x, u_y, S_{xx}, S_{xy}, \omega)$, shape ``(B, N, N, 5)``,
+    ``[b, iy, ix, c]``.
 
-    Nodes ``x_j = j L/N`` (:data:`swimrl.flows.fields.CHANNELS` order); computed exactly (to
-    round-off) by spectral differentiation of the truncated ``omega_hat``. ``grid`` defaults to
-    a grid inferred from the shape (box ``2 pi``, same device/dtype). ``cutoff``: ``omega_hat``
-    is zero for ``m_x > cutoff``, so the inverse transform along ``y`` runs on the
+    Nodes $x_j = jL/N$ (:data:`swimrl.flows.fields.CHANNELS` order); computed exactly (to
+    round-off) by spectral differentiation of the truncated $\hat\omega$. ``grid`` defaults to
+    a grid inferred from the shape (box $2\pi$, same device/dtype). ``cutoff``: $\hat\omega$
+    is zero for $m_x >$ ``cutoff``, so the inverse transform along $y$ runs on the
     ``cutoff + 1`` columns that hold modes only (a pruned ``irfft2``, the same numbers in
-    ~60 % of the time at 512^2 with the 2/3 rule).
+    ~60 % of the time at $512^2$ with the 2/3 rule).
     """
     w_hat = state_or_omega_hat.omega_hat if isinstance(state_or_omega_hat, DNSState) else (
         state_or_omega_hat

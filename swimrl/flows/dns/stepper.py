@@ -1,24 +1,34 @@
-"""Time stepping: ETDRK4 (Cox & Matthews 2002) with the stiff linear part treated exactly.
+r"""Time stepping: ETDRK4 (Cox & Matthews 2002) with the stiff linear part treated exactly.
 
-For ``v' = L v + N(v)`` with diagonal ``L`` and step ``h`` (Kassam & Trefethen 2005, eq. 26):
+For $v' = Lv + N(v)$ with diagonal $L$ and step $h$ (Kassam & Trefethen 2005, eq. 26):
 
-``a = E2 v + Q N(v)``,  ``b = E2 v + Q N(a)``,  ``c = E2 a + Q (2 N(b) - N(v))``,
-``v_new = E v + f1 N(v) + 2 f2 (N(a) + N(b)) + f3 N(c)``
+$$
+\begin{aligned}
+a &= E_2 v + Q\,N(v),\qquad b = E_2 v + Q\,N(a),\qquad c = E_2 a + Q\,(2N(b) - N(v)),\\
+v_\mathrm{new} &= E v + f_1 N(v) + 2f_2\,(N(a) + N(b)) + f_3 N(c)
+\end{aligned}
+$$
 
-with ``E = e^{hL}``, ``E2 = e^{hL/2}``, ``Q = (e^{hL/2} - 1)/L``,
-``f1 = h^{-2} L^{-3} [-4 - hL + e^{hL}(4 - 3hL + h^2 L^2)]``,
-``f2 = h^{-2} L^{-3} [2 + hL + e^{hL}(-2 + hL)]``,
-``f3 = h^{-2} L^{-3} [-4 - 3hL - h^2 L^2 + e^{hL}(4 - hL)]``,
+with $E = e^{hL}$, $E_2 = e^{hL/2}$, $Q = (e^{hL/2} - 1)/L$,
 
-evaluated without cancellation by averaging over a complex contour around ``hL`` (float64).
-The scheme is exact for ``N = 0`` (``v_new = e^{hL} v``) and for constant ``N``
-(``v_new = e^{hL} v + (e^{hL} - 1) N / L``): hence the exact decay of single modes and the
-exact steady state of the manufactured-solution test. Here ``N = advection + f`` with the
-forcing ``f`` drawn once per step and held over the four stages.
+$$
+\begin{aligned}
+f_1 &= h^{-2}L^{-3}\,[-4 - hL + e^{hL}(4 - 3hL + h^2L^2)],\\
+f_2 &= h^{-2}L^{-3}\,[2 + hL + e^{hL}(-2 + hL)],\\
+f_3 &= h^{-2}L^{-3}\,[-4 - 3hL - h^2L^2 + e^{hL}(4 - hL)],
+\end{aligned}
+$$
 
-CFL: before each step ``C = dt max_x(|u_x| + |u_y|) / dx`` is checked against ``cfl_max``
-(default 1; the frozen-coefficient RK4 bound on the imaginary axis, ``2.83``, over
-``k_max dx = 2 pi / 3``, gives 1.35) and :class:`CFLError` is raised instead of stepping.
+evaluated without cancellation by averaging over a complex contour around $hL$ (float64).
+The scheme is exact for $N = 0$ ($v_\mathrm{new} = e^{hL}v$) and for constant $N$
+($v_\mathrm{new} = e^{hL}v + (e^{hL} - 1)\,N/L$): hence the exact decay of single modes and
+the exact steady state of the manufactured-solution test. Here $N$ = advection $+ f$ with
+the forcing $f$ drawn once per step and held over the four stages.
+
+CFL: before each step $C = \delta t\,\max_{\boldsymbol x}(|u_x| + |u_y|)/\delta x$ is checked
+against ``cfl_max`` (default 1; the frozen-coefficient RK4 bound on the imaginary axis, 2.83,
+over $k_\mathrm{max}\,\delta x = 2\pi/3$, gives 1.35) and :class:`CFLError` is raised instead
+of stepping.
 """
 
 from __future__ import annotations
@@ -40,10 +50,10 @@ class CFLError(RuntimeError):
 
 
 def etdrk4_coefficients(L: torch.Tensor, h: float, n_contour: int = 64) -> dict[str, torch.Tensor]:
-    """``E, E2, Q, f1, f2, f3`` for real diagonal ``L`` (float64), by contour averaging.
+    r"""$E, E_2, Q, f_1, f_2, f_3$ for real diagonal $L$ (float64), by contour averaging.
 
-    Each ``phi(z)`` is the mean of ``phi(z + r_j)`` over ``r_j = exp(i pi (j - 1/2)/M)``,
-    ``j = 1..M`` on the unit circle (Kassam & Trefethen 2005), taking the real part.
+    Each $\varphi(z)$ is the mean of $\varphi(z + r_j)$ over $r_j = \exp(i\pi(j - 1/2)/M)$,
+    $j = 1, \dots, M$ on the unit circle (Kassam & Trefethen 2005), taking the real part.
     """
     L = L.double()
     r = torch.exp(1j * math.pi * (torch.arange(1, n_contour + 1, dtype=torch.float64) - 0.5)
@@ -59,7 +69,7 @@ def etdrk4_coefficients(L: torch.Tensor, h: float, n_contour: int = 64) -> dict[
 
 
 class ETDRK4:
-    """ETDRK4 stepper for ``v' = L v + N(v)``; coefficients cast to the grid device.
+    """ETDRK4 stepper for $v' = Lv + N(v)$; coefficients cast to the grid device.
 
     The coefficients are stored as complex tensors (real values): complex-by-complex products
     are faster than mixed real/complex ones in torch on CPU.
@@ -77,7 +87,8 @@ class ETDRK4:
         n_v: torch.Tensor,
         nonlinear: Callable[[torch.Tensor], torch.Tensor],
     ) -> torch.Tensor:
-        """One step from ``v`` given ``n_v = N(v)`` (already evaluated); returns ``v(t + dt)``."""
+        r"""One step from ``v`` given ``n_v`` $= N(v)$ (already evaluated); returns
+        $v(t + \delta t)$."""
         c = self.coef
         e2v = c["E2"] * v
         a = (c["Q"] * n_v).add_(e2v)
@@ -92,13 +103,13 @@ class ETDRK4:
 
 
 class DNS:
-    """A batch of ``B`` independent DNS realisations advanced together.
+    r"""A batch of ``B`` independent DNS realisations advanced together.
 
     ``forcing``: ``None`` builds a :class:`StochasticForcing` with ``seeds`` (default
     ``0..B-1``) when ``epsilon > 0``; pass a :class:`SteadyForcing` for a deterministic one.
     ``advection_form``: ``"basdevant"`` (4 FFTs per evaluation, default) or ``"divergence"``
     (5 FFTs), see :class:`Advection`.
-    After each step :attr:`last_forcing` holds the ``f_hat`` used during that step.
+    After each step :attr:`last_forcing` holds the $\hat f$ used during that step.
     """
 
     def __init__(
@@ -139,7 +150,8 @@ class DNS:
         return self.params.dt
 
     def cfl_number(self, speed: torch.Tensor) -> torch.Tensor:
-        """``C = dt max_x(|u_x| + |u_y|) / dx`` per realisation from ``speed``."""
+        r"""$C = \delta t\,\max_{\boldsymbol x}(|u_x| + |u_y|)/\delta x$ per realisation from
+        ``speed``."""
         return speed * (self.params.dt / self.grid.spacing)
 
     def _check(self, speed: torch.Tensor) -> None:

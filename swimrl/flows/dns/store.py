@@ -1,21 +1,27 @@
-"""Zarr store of a DNS run: its layout and the resumable writer used by ``swimrl-dns``.
+r"""Zarr store of a DNS run: its layout and the resumable writer used by ``swimrl-dns``.
 
 Layout (zarr format 3, consolidated metadata, readable with ``xarray.open_zarr(path)``)::
 
-    omega_hat (time, ky, kx) complex64   Fourier coefficients c_k of the vorticity,
-                                         omega(x) = sum_k c_k exp(i k.x), c = rfft2(omega)/N^2,
+    omega_hat (time, ky, kx) complex64   Fourier coefficients c_k of the vorticity (below),
                                          retained modes only: ky = -K..K, kx = 0..K
     time (time) float64, ky (ky) int32, kx (kx) int32     coordinates (integer wavenumbers)
     diagnostics/  time series (t, E, Z, rates) every ``diag_every`` steps
     checkpoint/   solver state (complex128, same packing, unnormalised) + RNG state, as
                   omega_hat_<v>, rng_<v>; the attribute checkpoint_version = v points to it
 
+with the coefficients $c_{\boldsymbol k}$ of
+
+$$
+\omega(\boldsymbol x) = \sum_{\boldsymbol k} c_{\boldsymbol k}\,
+e^{i\boldsymbol k\cdot\boldsymbol x},\qquad c = \mathrm{rfft2}(\omega)/N^2.
+$$
+
 Every array ends its codec chain with a crc32c checksum of each chunk (``omega_hat``: no
 compression, then the checksum; the others: zarr's default zstd, then the checksum); a damaged
 chunk is an :class:`~swimrl.errors.IntegrityError` on reading
 (:mod:`swimrl.flows.dns.integrity`; ``swimrl-dns-verify`` checks a whole store).
 
-Channels ``(u_x, u_y, S_xx, S_xy, omega)`` are reconstructed from ``omega_hat`` by spectral
+Channels $(u_x, u_y, S_{xx}, S_{xy}, \omega)$ are reconstructed from ``omega_hat`` by spectral
 differentiation (:func:`swimrl.flows.dns.state.flow_channels`); they equal the solver's own
 fields up to the float32 rounding of the stored coefficients (~1e-7 relative), at 1/11 of the
 size of five float32 node fields. Root attributes hold the parameters, ``dt_store``,
@@ -72,8 +78,8 @@ def pack(omega_hat: torch.Tensor, n: int) -> torch.Tensor:
 
 
 def unpack(packed: torch.Tensor, n: int, cutoff: int | None = None) -> torch.Tensor:
-    """Inverse of :func:`pack`: zero-filled ``(..., N, N//2+1)``; ``packed`` holds the modes
-    ``|m| <= cutoff`` (default: the 2/3 rule's ``K`` of ``n``)."""
+    r"""Inverse of :func:`pack`: zero-filled ``(..., N, N//2+1)``; ``packed`` holds the modes
+    $|m| \le$ ``cutoff`` (default: the 2/3 rule's $K$ of ``n``)."""
     K = dealias_cutoff(n) if cutoff is None else cutoff
     iy = torch.remainder(torch.arange(-K, K + 1), n).to(packed.device)
     out = torch.zeros((*packed.shape[:-2], n, n // 2 + 1), dtype=packed.dtype, device=packed.device)

@@ -10,17 +10,19 @@ Checks, one line each (``ok``, ``FAIL``, ``unverified`` or ``skipped``):
 * **finite** and **rms velocity**: each snapshot's coefficients are finite and its rms
   velocity is within a factor :data:`~swimrl.flows.dns.integrity.RMS_FACTOR` of the store's
   ``u_rms`` (:class:`~swimrl.flows.dns.integrity.SnapshotCheck`);
-* **energy / enstrophy vs diagnostics**: ``E = sum w|c|^2/(2k^2)`` and ``Z = sum w|c|^2/2`` of
-  each snapshot against the run's own diagnostics series. The solver samples its diagnostics
-  every ``diag_every`` steps and stores a snapshot every ``store_every`` steps, so every
-  ``lcm/store_every``-th snapshot (every 25th at 512^2) falls on a diagnostics sample: those
-  must agree to :data:`ENERGY_RTOL` = 1e-4 relative (they differ only by the float32 rounding of
-  the stored coefficients, ~1e-7; measured <= 1e-8 on a 128^2 run). Only when no snapshot
+* **energy / enstrophy vs diagnostics**: $E = \sum w\,|c|^2/(2k^2)$ and
+  $Z = \sum w\,|c|^2/2$ of each snapshot against the run's own diagnostics series. The solver
+  samples its diagnostics every ``diag_every`` steps and stores a snapshot every
+  ``store_every`` steps, so every ``lcm/store_every``-th snapshot (every 25th at $512^2$)
+  falls on a diagnostics sample: those must agree to :data:`ENERGY_RTOL` = 1e-4 relative
+  (they differ only by the float32 rounding of the stored coefficients, ~1e-7; measured
+  $\le$ 1e-8 on a $128^2$ run). Only when no snapshot
   falls on a sample are the series interpolated linearly to the snapshot times, with
-  :data:`INTERP_RTOL` = 0.25 (the white-in-time forcing makes ``E(t)`` rough: linear
-  interpolation over samples 0.7 tau_K apart misses by up to 8 %, 2 % rms, on that run);
+  :data:`INTERP_RTOL` = 0.25 (the white-in-time forcing makes $E(t)$ rough: linear
+  interpolation over samples $0.7\,\tau_K$ apart misses by up to 8 %, 2 % rms, on that run);
 * **scales**: the ``u_rms`` and ``tau_k`` attributes equal the snapshots' own averages
-  ``<u.u>^{1/2}``, ``<2Z>^{-1/2}`` (:data:`ENERGY_RTOL`), for stores whose attributes say they
+  $\langle\boldsymbol u\cdot\boldsymbol u\rangle^{1/2}$, $\langle 2Z\rangle^{-1/2}$
+  (:data:`ENERGY_RTOL`), for stores whose attributes say they
   were measured over exactly the stored snapshots (``s_count = n_written``).
 
 The verdict is ``clean`` when no check failed (``clean, unverified: no checksums`` for an old
