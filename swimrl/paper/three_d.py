@@ -151,9 +151,10 @@ def build_three_d_paths(records: dict[str, Path], path: Path, n_paths: int = 3) 
             ax.set_ylabel(f"${'xyz'[j]} - {'xyz'[j]}_0$ ($\\ell_f$)")
         r_hat = d["R_hat"][0, 0, :k]
         out[name] = [float(x) for x in r_hat]
-        axes[0, col].set_title(f"{name}: " + ", ".join(f"{x:.2f}" for x in r_hat)
-                               + r" ($\hat R$)", fontsize=9)
-    fig.colorbar(line, ax=axes, shrink=0.6, label=r"$\Lambda$")
+        axes[0, col].set_title(f"{name}: $\\hat R$ of the {k} swimmers drawn\n"
+                               + ", ".join(f"{x:.2f}" for x in r_hat), fontsize=9)
+    bar = fig.colorbar(line, ax=axes, shrink=0.6)
+    bar.set_label(r"$\Lambda$", rotation=0, labelpad=10)   # upright: a turned Λ reads as V
     save(fig, path)
     return {"path": str(path), "R_hat": out}
 
