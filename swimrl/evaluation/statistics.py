@@ -39,12 +39,23 @@ def paired_ratio(a: np.ndarray, b: np.ndarray) -> tuple[float, float]:
 
 
 def mean_flow_stats(stats: list[dict], how: str) -> dict:
-    """Mean of the flows' ``measured_stats()`` (``u_rms``, ``tau_K``) over environments."""
-    return {
-        "u_rms": float(np.mean([s["u_rms"] for s in stats])),
-        "tau_K": float(np.mean([s["tau_K"] for s in stats])),
-        "note": f"grid averages at the end of each episode, {how}",
-    }
+    """Mean of the flows' ``measured_stats()`` (``u_rms``, ``tau_K``) over environments; a
+    scale the flow does not have (None: a linear flow has no ``u_rms``) is recorded as null,
+    with the reason under ``undefined``."""
+    out: dict = {}
+    undefined = []
+    for key in ("u_rms", "tau_K"):
+        values = [s[key] for s in stats]
+        if any(v is None for v in values):
+            out[key] = None
+            undefined.append(key)
+        else:
+            out[key] = float(np.mean(values))
+    out["note"] = f"grid averages at the end of each episode, {how}"
+    if undefined:
+        out["undefined"] = (f"{', '.join(undefined)}: the flow defines no such scale "
+                            "(a linear flow has no velocity scale)")
+    return out
 
 
 def chunk_outcomes(outcomes: dict, block: slice, update_interval: float) -> dict:

@@ -14,8 +14,6 @@ $(\boldsymbol u, \mathbb A)$ by :func:`channels_2d`.
 
 from __future__ import annotations
 
-import math
-
 import torch
 
 
@@ -123,9 +121,10 @@ class PointFlow:
         $|\boldsymbol x|$)."""
         return None
 
-    def measured_stats(self) -> dict[str, float]:
-        """The reference scales ``u_rms`` (NaN for a flow without one) and ``tau_K``."""
-        return {"u_rms": math.nan if self.u_rms is None else float(self.u_rms),
+    def measured_stats(self) -> dict[str, float | None]:
+        """The reference scales ``u_rms`` (None for a flow without one: a linear flow has no
+        velocity scale) and ``tau_K``."""
+        return {"u_rms": None if self.u_rms is None else float(self.u_rms),
                 "tau_K": float(self.tau_k)}
 
     def times(self, flows: torch.Tensor) -> torch.Tensor:
