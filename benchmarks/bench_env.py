@@ -26,11 +26,12 @@ defaults, which map and unmap the 3D flow's large temporaries every call:
     python benchmarks/bench_env.py --flow stochastic3d --threads 1 --batches 512x8 64x8
 
 ``--flow stochastic3d``: the 3D stochastic flow (random Fourier modes evaluated at the
-swimmers, ``--n-waves`` per component; kernels ``eager`` and ``compiled``, the compiled mode
-sum of :func:`swimrl.flows.stochastic3d.compiled_mode_sum`):
+swimmers, ``--n-waves`` per component; kernels ``eager``, ``compiled``, the compiled mode
+sum of :func:`swimrl.flows.stochastic3d.compiled_mode_sum`, and ``fused``, the fused C++
+kernel of the 3D interval, :func:`swimrl.physics.integrator.integrate_interval_3d_fused`):
 
     python benchmarks/bench_env.py --flow stochastic3d --threads 1 --batches 512x8 \
-        --kernels eager compiled
+        --kernels compiled fused
 """
 
 from __future__ import annotations
@@ -153,8 +154,6 @@ def main(argv: list[str] | None = None) -> list[dict]:
         flows, swimmers = (int(v) for v in b.split("x"))
         for kernel in args.kernels:
             if kernel == "fused" and not args.device.startswith("cpu"):
-                continue
-            if args.flow == "stochastic3d" and kernel == "fused":
                 continue
             r = measure(flows, swimmers, kernel, args)
             rows.append({"batch": b, "kernel": kernel, **r})

@@ -42,6 +42,7 @@ from swimrl.physics.signals import SIGNAL_NAMES
 from swimrl.physics.signals3d import SIGNAL_NAMES_3D
 from swimrl.policies.baselines import StrategySpec
 from swimrl.policies.networks import ModelSpec
+from swimrl.policies.optimised import RULE_COEFFS, preset_coefficients, resolve_coefficients
 from swimrl.rl.plan import LossSettings, OptimSettings, TrainConfig, TrainSettings
 from swimrl.runs.spec import EvalSizes, RunSpec
 from swimrl.runtime import Runtime
@@ -170,20 +171,28 @@ def eval_setup(cfg: DictConfig) -> RunSpec:
                      runtime=rt, sizes=eval_sizes(cfg.eval), record=record_of(cfg))
 
 
-def strategy_spec(node: DictConfig) -> StrategySpec:
-    """The ``strategy`` group (each strategy's yaml holds its own fields only)."""
+def strategy_spec(node: DictConfig, dim: int | None = None) -> StrategySpec:
+    """The ``strategy`` group (each strategy's yaml holds its own fields only); ``dim``: the
+    flow's dimension (``strategy=optimised``: a preset must be of the flow's signals)."""
     if node.name == "naive":
         return StrategySpec("naive", shape_factor=_float(node.shape_factor))
     if node.name == "minimal":
         return StrategySpec("minimal", coeffs=tuple(_float(node[k]) for k in ("c1", "c2", "c3",
                                                                                "c4")))
+    if node.name == "optimised":
+        if dim is None:
+            raise ValueError("strategy=optimised needs the flow's dimension")
+        given = {k: node.get(k) for k in RULE_COEFFS}
+        return StrategySpec("optimised", coeffs=resolve_coefficients(node.get("preset"), given,
+                                                                     dim))
     return StrategySpec(str(node.name))
 
 
 def eval_config(cfg: DictConfig) -> EvalConfig:
     """``swimrl-eval`` (``conf/evaluate.yaml``)."""
-    return from_node(EvalConfig, {"": cfg}, setup=eval_setup(cfg),
-                     strategy=strategy_spec(cfg.strategy))
+    setup = eval_setup(cfg)
+    return from_node(EvalConfig, {"": cfg}, setup=setup,
+                     strategy=strategy_spec(cfg.strategy, setup.dimension))
 
 
 def compare_config(cfg: DictConfig) -> CompareConfig:
@@ -198,6 +207,8 @@ def compare_config(cfg: DictConfig) -> CompareConfig:
         [str(p) for p in (c.policies or [])],
         [read_coefficients(p) for p in (c.minimal_fits or [])],
         [tuple(_float(x) for x in pair) for pair in c.sto_amplitudes],
+        [(str(p), preset_coefficients(str(p), setup.dimension, "compare.optimised_presets"))
+         for p in c.optimised_presets],
     )
     return from_node(CompareConfig, {"compare.": c, "": cfg}, setup=setup, variants=variants)
 

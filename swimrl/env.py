@@ -53,13 +53,21 @@ from torchrl.data import Bounded, Categorical, Composite, Unbounded
 from torchrl.envs import EnvBase
 
 from swimrl.conf_values import yaml_value
-from swimrl.errors import ConfigError, IntegrityError, as_float, keep_number_types, one_of
+from swimrl.errors import (
+    ConfigError,
+    IntegrityError,
+    as_float,
+    keep_number_types,
+    one_of,
+    require,
+)
 from swimrl.flows.base import GriddedFlow
 from swimrl.flows.build import FlowSpec, build_flow
 from swimrl.flows.pointwise import PointFlow, channels_2d
 from swimrl.flows.registry import POINT_KERNELS
+from swimrl.flows.stochastic3d import StochasticFlow3D
 from swimrl.physics.energy import drag_factor
-from swimrl.physics.integrator import select_kernel
+from swimrl.physics.integrator import integrate_interval_3d_fused, select_kernel
 from swimrl.physics.signals import SHAPE_SIGNAL, SIGNAL_NAMES, compute_signals, signal_indices
 from swimrl.physics.signals3d import SIGNAL_NAMES_3D, compute_signals_3d
 from swimrl.physics.swimmer import heun_step
@@ -734,7 +742,10 @@ class PointSwimmerEnv(SwimmerEnv):
     (``dn/dt = omega x n / 2 + Lambda (S n - (n.S n) n)``), the signals the seven of
     :mod:`swimrl.physics.signals3d` and a target's direction uniform on the sphere. Every
     decision integrates ``T_u / dt`` Heun steps eagerly; ``kernel=compiled`` (``auto`` on a
-    GPU) evaluates the 3D stochastic flow by its compiled mode sum.
+    GPU) evaluates the 3D stochastic flow by its compiled mode sum; ``kernel=fused`` (the 3D
+    stochastic flow on the CPU) runs the whole interval in the fused C++ kernel
+    (:func:`~swimrl.physics.integrator.integrate_interval_3d_fused`), the flow's coefficients
+    at the step times drawn first, in the eager path's order.
     """
 
     def __init__(self, flow: PointFlow, n_swimmers: int, params: EnvParams,
@@ -754,8 +765,20 @@ class PointSwimmerEnv(SwimmerEnv):
     def _select_kernel(self, kernel: str, device: torch.device):
         """``compiled`` (and ``auto`` on a device other than the CPU): the flow's compiled
         sampler where it has one (:meth:`~swimrl.flows.pointwise.PointFlow.compile_sampler`);
-        the Heun steps stay eager."""
-        one_of("kernel", kernel, POINT_KERNELS)
+        the Heun steps stay eager (returns None). ``fused``: the 3D stochastic flow on the CPU
+        only, the interval in :func:`~swimrl.physics.integrator.integrate_interval_3d_fused`
+        (returned). ``auto`` on the CPU stays eager (the committed 3D records' path)."""
+        one_of("kernel", kernel, (*POINT_KERNELS, "fused"))
+        if kernel == "fused":
+            require(isinstance(self.flow, StochasticFlow3D), "kernel", kernel,
+                    "one of ['auto', 'eager', 'compiled'] for this flow (fused: "
+                    "flow=stochastic3d on the CPU)")
+            require(device.type == "cpu", "kernel", kernel,
+                    f"one of ['auto', 'eager', 'compiled'] on device={device} (fused: the CPU)")
+            require(self.flow.dtype in (torch.float32, torch.float64), "kernel", kernel,
+                    f"one of ['auto', 'eager', 'compiled'] with dtype {self.flow.dtype} "
+                    "(fused: float32 or float64)")
+            return integrate_interval_3d_fused
         if kernel == "compiled" or (kernel == "auto" and device.type != "cpu"):
             self.flow.compile_sampler()
         return None
@@ -836,6 +859,9 @@ class PointSwimmerEnv(SwimmerEnv):
         pos = self.pos
         orient = self.orientation if d == 3 else self.theta
         self._track_speed()
+        if self._kernel is not None:
+            self._integrate_fused(lam, d_r)
+            return
         for _ in range(self.params.n_substeps):
             noise = None
             if d_r > 0:
@@ -857,6 +883,30 @@ class PointSwimmerEnv(SwimmerEnv):
             self.orientation.copy_(orient)
         else:
             self.theta.copy_(torch.remainder(orient, 2 * math.pi))
+
+    def _integrate_fused(self, lam: torch.Tensor, d_r: float) -> None:
+        """:meth:`integrate` by the fused 3D kernel: the flow is advanced through the interval
+        first (its coefficients at the ``K + 1`` step times kept, the speed bound tracked),
+        the rotational noise of each step drawn just before that step's flow advance, as the
+        eager loop draws them (one generator: the same numbers in the same order)."""
+        flow = self.flow
+        path = [flow.coeffs.clone()]
+        noise = []
+        for _ in range(self.params.n_substeps):
+            if d_r > 0:
+                noise.append(torch.randn(self.batch_size + (3,), generator=self.generator,
+                                         device=self.device, dtype=self.pos.dtype))
+            self._advance()
+            path.append(flow.coeffs.clone())
+            self._track_speed()
+        # a fixed basis is one row for every flow
+        rows = self._flow_index if flow.wavevectors.shape[0] > 1 else self._flow_index * 0
+        pos, orient = self._kernel(
+            flow.wavevectors, flow.table, torch.stack(path), rows, self._flow_index,
+            self.pos.view(-1, 3), self.orientation.view(-1, 3), lam.reshape(-1),
+            torch.stack(noise) if noise else None, flow.n_waves, self.swim_speed, self.dt, d_r)
+        self.pos.copy_(pos.view_as(self.pos))
+        self.orientation.copy_(orient.view_as(self.orientation))
 
     def _advance(self) -> None:
         self.flow.advance(self.dt)

@@ -372,7 +372,7 @@ def test_compiled_sampler_agrees_with_the_eager_one(basis):
 
 def test_compiled_kernel_runs_the_3d_env_as_the_eager_one(compose_cfg):
     """A 3D environment with ``kernel=compiled`` follows the eager one's swimmers to float32
-    round-off over a decision, and ``kernel`` refuses a 2D-grid kernel in one line."""
+    round-off over a decision, and ``kernel`` refuses a kernel the flow lacks in one line."""
     from swimrl.config import env_params
     from swimrl.env import PointSwimmerEnv
 
@@ -393,5 +393,5 @@ def test_compiled_kernel_runs_the_3d_env_as_the_eager_one(compose_cfg):
     assert envs["eager"].flow._mode_sum is mode_sum
     auto = PointSwimmerEnv(StochasticFlow3D(1, 10.0), 2, params, kernel="auto")
     assert auto.flow._mode_sum is mode_sum  # auto on the CPU: eager
-    with pytest.raises(ConfigError, match="kernel"):
-        PointSwimmerEnv(StochasticFlow3D(1, 10.0), 2, params, kernel="fused")
+    with pytest.raises(ConfigError, match="kernel"):  # fused: the 3D stochastic flow only
+        PointSwimmerEnv(ABCFlow(1), 2, params, kernel="fused")

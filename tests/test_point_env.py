@@ -182,7 +182,6 @@ SMALL_3D = ["flow=stochastic3d", "episode.duration=0.5", "eval.n_flows=2",
 @pytest.mark.parametrize(("override", "key"), [
     ("signals.names=[n_r,n_theta]", "signals.names"),
     ("signals=nth_snp", "signals.names"),
-    ("kernel=fused", "kernel"),
     ("strategy=minimal", "strategy=minimal"),
     ("flow.n_waves=0", "flow.n_waves"),
     ("flow.basis=grid", "flow.basis"),
@@ -200,6 +199,7 @@ def test_3d_bad_input_names_the_key(compose_cfg, override, key):
     ("linear", "flow.gradient=[[1,0,0],[0,1]]", "flow.gradient"),
     ("abc", "flow.terms=[[1,1,1,0]]", "flow.terms"),
     ("abc", "flow.modulation=.nan", "flow.modulation"),
+    ("abc", "kernel=fused", "kernel"),  # fused: flow=stochastic3d (and the 2D grids) only
     ("taylor_green", "flow.wavenumber=-1", "flow.wavenumber"),
 ])
 def test_analytic_flow_bad_input(compose_cfg, flow, override, key):

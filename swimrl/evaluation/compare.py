@@ -106,18 +106,26 @@ def strategy_variants(
     minimal_fits: Sequence[tuple[str, Sequence[float]]] = yaml_value(
         "compare", "compare.minimal_fits"),
     sto_amplitudes: Sequence[Sequence[float]] = yaml_value("compare", "compare.sto_amplitudes"),
+    optimised_presets: Sequence[tuple[str, Sequence[float]]] = yaml_value(
+        "compare", "compare.optimised_presets"),
 ) -> tuple[Variant, ...]:
     """Variants of ``compare.strategies`` (the keyword defaults: read from ``conf/compare.yaml``):
     ``naive`` expands over ``naive_shape_factors``, ``minimal`` takes the ``minimal``
     coefficients c1..c4, or expands over the labelled ``minimal_fits`` where given, and
     ``policy`` expands over ``policies`` (run dirs, checkpoints, ``pretrained/NAME``), ``sto``
     over the pairs ``(a_+, a_-)`` of ``sto_amplitudes`` where given (the energy-aware family,
-    :class:`~swimrl.policies.baselines.ShortTimeOptimal`)."""
-    allowed = "a list of 'naive', 'sto', 'minimal', 'policy'"
+    :class:`~swimrl.policies.baselines.ShortTimeOptimal`), ``optimised`` over the labelled
+    coefficients ``optimised_presets`` (``compare.optimised_presets``: preset names, resolved
+    for the flow's dimension by :func:`~swimrl.policies.optimised.preset_coefficients`)."""
+    allowed = "a list of 'naive', 'sto', 'minimal', 'optimised', 'policy'"
     labels = [label for label, _ in minimal_fits]
     if minimal_fits and "minimal" not in strategies:
         raise ConfigError(f"compare.minimal_fits has {len(labels)} fits but compare.strategies "
                           f"{list(strategies)} has no 'minimal': allowed only with 'minimal'")
+    if optimised_presets and "optimised" not in strategies:
+        raise ConfigError(f"compare.optimised_presets has {len(optimised_presets)} presets but "
+                          f"compare.strategies {list(strategies)} has no 'optimised': allowed "
+                          "only with 'optimised'")
     if len(set(labels)) < len(labels):
         raise ConfigError(f"compare.minimal_fits has run directories of the same name {labels}: "
                           "allowed fits whose directories have distinct names (the row labels)")
@@ -140,6 +148,14 @@ def strategy_variants(
         elif name == "minimal":
             out.append(Variant(StrategyLabel.minimal().label,
                                StrategySpec("minimal", coeffs=tuple(minimal))))
+        elif name == "optimised":
+            if not optimised_presets:
+                raise ConfigError("compare.strategies has 'optimised' but "
+                                  "compare.optimised_presets is empty: allowed a list of "
+                                  "presets of swimrl.policies.optimised.PRESETS")
+            out += [Variant(StrategyLabel("optimised", str(label)).label,
+                            StrategySpec("optimised", coeffs=tuple(c)))
+                    for label, c in optimised_presets]
         elif name == "policy":
             if not policies:
                 raise ConfigError("compare.strategies has 'policy' but compare.policies is empty: "

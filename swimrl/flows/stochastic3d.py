@@ -420,4 +420,4 @@ def _bytes(spec: Stochastic3DSpec, n_flows: int, dtype: torch.dtype, interval: f
 
 
 register_flow(FlowEntry("stochastic3d", Stochastic3DSpec, _build, 3, table_bytes=_bytes,
-                        kernels=POINT_KERNELS))
+                        kernels=(*POINT_KERNELS, "fused")))  # fused: heun3d_cpu.cpp

@@ -18,18 +18,26 @@ Three implementations with the same arithmetic:
   (``kernel=auto``); on the CPU the hand-fused kernel is faster (``benchmarks/bench_env.py``:
   2.5x at 4096 swimmers), so ``auto`` keeps it there.
 
+The 3D stochastic flow (:mod:`swimrl.flows.stochastic3d`, evaluated at the swimmers, no grid)
+has its own fused CPU kernel, :func:`integrate_interval_3d_fused`
+(``swimrl/physics/kernels/heun3d_cpu.cpp``): the $K$ steps of
+:func:`~swimrl.physics.swimmer3d.heun_step_3d` per swimmer, the mode sum vectorised over the
+modes, with the same coefficient-path contract (``kernel=fused`` of
+:class:`~swimrl.env.PointSwimmerEnv`).
+
 Every kernel is free of host synchronisation: no ``.item()``, no branch on a tensor value.
 """
 
 from __future__ import annotations
 
 import functools
+import math
 
 import torch
 
 from swimrl.errors import one_of, require
 from swimrl.flows.base import sample_basis
-from swimrl.physics.kernels import load_cpu_kernel
+from swimrl.physics.kernels import load_cpu_kernel, load_cpu_kernel_3d
 from swimrl.physics.swimmer import heun_step
 
 
@@ -89,6 +97,68 @@ def integrate_interval_fused(
         float(dt),
     )
     return pos, theta
+
+
+def integrate_interval_3d_fused(
+    wavevectors: torch.Tensor,
+    table: torch.Tensor,
+    coeff_path: torch.Tensor,
+    rows: torch.Tensor,
+    flows: torch.Tensor,
+    pos: torch.Tensor,
+    orientation: torch.Tensor,
+    shape_factor: torch.Tensor,
+    rot_noise: torch.Tensor | None,
+    n_waves: int,
+    swim_speed: float,
+    dt: float,
+    rot_diffusion: float = 0.0,
+) -> tuple[torch.Tensor, torch.Tensor]:
+    r"""Advance ``(pos, orientation)`` ``(P, 3)`` of swimmers in the 3D stochastic flow by
+    ``len(coeff_path) - 1`` steps of :func:`~swimrl.physics.swimmer3d.heun_step_3d`, $\Lambda$
+    held, in the fused CPU kernel (``swimrl/physics/kernels/heun3d_cpu.cpp``); returns new
+    tensors (the inputs are kept).
+
+    The flow is that of :class:`~swimrl.flows.stochastic3d.StochasticFlow3D`:
+    ``wavevectors`` ``(R, MK, 3)`` and ``table`` ``(R, 2MK, 12)`` of its basis rows
+    (``n_waves`` modes per component), ``coeff_path`` ``(steps + 1, F, M)`` its coefficients at
+    the step times (stage 1 of step $k$ at $t_k$, stage 2 at $t_{k+1}$), ``rows`` and
+    ``flows`` ``(P,)`` each swimmer's basis row and flow. ``rot_noise`` ``(steps, P, 3)``: the
+    standard normal numbers of :func:`~swimrl.physics.swimmer3d.rotational_diffusion` at each
+    step (None: no noise), ``rot_diffusion`` $D_r$. Float32 or float64 CPU tensors.
+
+    The kernel evaluates the terms of :func:`~swimrl.flows.stochastic3d.mode_sum` (equal to
+    round-off), vectorised over the modes $n$, with $\phi_n = \boldsymbol k_n\cdot\boldsymbol x$:
+    $\boldsymbol u = \sum_n w_n(\boldsymbol P_n\cos\phi_n + \boldsymbol Q_n\sin\phi_n)$,
+    $A_{ij} = \sum_n w_n(Q_{ni}\cos\phi_n - P_{ni}\sin\phi_n)\,k_{nj}$; swimmers in runs of
+    one flow (an environment's ``(F, S)`` batch) share the layout of their flow's modes.
+    """
+    ext = load_cpu_kernel_3d()
+    if ext is None:
+        raise RuntimeError("the fused 3D CPU kernel could not be built; use kernel=eager or "
+                           "kernel=compiled")
+    dtype = pos.dtype
+    pos = pos.reshape(-1, 3).to(dtype).contiguous().clone()
+    orientation = orientation.reshape(-1, 3).to(dtype).contiguous().clone()
+    lam = torch.as_tensor(shape_factor, dtype=dtype).expand(pos.shape[:1]).contiguous()
+    a = -math.expm1(-2.0 * (rot_diffusion * dt))  # as heun_step_3d's
+    ext.integrate_interval_3d_cpu(
+        wavevectors.to(dtype).contiguous(),
+        table.to(dtype).contiguous(),
+        coeff_path.to(dtype).contiguous(),
+        rows.to(torch.int64).contiguous(),
+        flows.to(torch.int64).contiguous(),
+        pos,
+        orientation,
+        lam,
+        None if rot_noise is None else rot_noise.to(dtype).reshape(-1, pos.shape[0], 3)
+        .contiguous(),
+        int(n_waves),
+        float(swim_speed),
+        float(dt),
+        a,
+    )
+    return pos, orientation
 
 
 @functools.cache

@@ -9,7 +9,9 @@ writing ``action`` (the shape factor ``Lambda``, shape ``(..., 1)``) within
 * STO (``eq:sto``): ``Lambda = -Lambda_max sign(n_theta) sign(S_np)``;
 * minimal model (``eq:fit``):
   ``Lambda = Lambda_max tanh[-c1 n_theta sign(S_np) - c2 H(n_r) omega tau_K sign(S_np)
-  + c3 n_r - c4 tanh(S_nn tau_K)]``, ``H`` the Heaviside step (``H(0) = 0``).
+  + c3 n_r - c4 tanh(S_nn tau_K)]``, ``H`` the Heaviside step (``H(0) = 0``);
+* the optimised rule (:mod:`.optimised`): ``eq:fit`` in frame-invariant terms, 2D and 3D,
+  with six coefficients optimised on ``R_hat``.
 """
 
 from __future__ import annotations
@@ -28,9 +30,10 @@ from swimrl.flows.labels import parse_ku_name
 from swimrl.physics.signals import SIGNAL_NAMES
 from swimrl.policies.baselines3d import ShortTimeOptimal3D
 from swimrl.policies.networks import action_bounds
+from swimrl.policies.optimised import RULE_COEFFS, OptimisedRule, check_coefficients, signal_names
 
 N_R, N_THETA, S_NN, S_NP, OMEGA = range(len(SIGNAL_NAMES))  # positions in SIGNAL_NAMES
-STRATEGIES = ("naive", "sto", "minimal", "policy")
+STRATEGIES = ("naive", "sto", "minimal", "optimised", "policy")
 _LABEL = re.compile(r"(\w+)\((.*)\)", re.DOTALL)
 
 
@@ -127,7 +130,8 @@ def as_actor(module: nn.Module) -> TensorDictModule:
 @dataclass(frozen=True)
 class StrategySpec:
     """``strategy=NAME``: ``naive`` (with ``shape_factor``), ``sto``, ``minimal`` (with
-    ``coeffs`` c1..c4) or ``policy`` (a trained policy, loaded by :mod:`.files`).
+    ``coeffs`` c1..c4), ``optimised`` (with ``coeffs`` c1, c2, c3, c4, n0, w:
+    :mod:`.optimised`) or ``policy`` (a trained policy, loaded by :mod:`.files`).
 
     Parameters
     ----------
@@ -136,7 +140,9 @@ class StrategySpec:
     shape_factor
         ``naive``: the constant ``Lambda``, in ``(-1, 1)``.
     coeffs
-        ``minimal``: ``(c1, c2, c3, c4)``.
+        ``minimal``: ``(c1, c2, c3, c4)``; ``optimised``: ``(c1, c2, c3, c4, n0, w)`` (a
+        preset's are checked against the flow's signals where the config is read,
+        :func:`~swimrl.policies.optimised.resolve_coefficients`).
     amplitudes
         ``sto``: ``(a_+, a_-)``, the prolate and oblate amplitudes (:class:`ShortTimeOptimal`;
         None: both ``Lambda_max``).
@@ -144,7 +150,7 @@ class StrategySpec:
 
     name: str
     shape_factor: float | None = None
-    coeffs: tuple[float, float, float, float] | None = None
+    coeffs: tuple[float, ...] | None = None
     amplitudes: tuple[float, float] | None = None
 
     def __post_init__(self) -> None:
@@ -154,6 +160,10 @@ class StrategySpec:
         if self.name == "minimal":
             require(self.coeffs is not None and len(self.coeffs) == 4, "strategy.c1..c4",
                     self.coeffs, "four numbers")
+        if self.name == "optimised":
+            require(self.coeffs is not None, "strategy.c1..w", self.coeffs,
+                    f"six numbers {list(RULE_COEFFS)}")
+            object.__setattr__(self, "coeffs", check_coefficients(self.coeffs))
         if self.amplitudes is not None:
             allowed = "a pair [a_+, a_-] of numbers in [0, 1) (strategy=sto only)"
             pair = tuple(self.amplitudes)
@@ -167,8 +177,8 @@ class StrategySpec:
         """``strategy=minimal`` reads ``n_theta`` and ``S_np``, 2D signals: refused in 3D."""
         if dim == 3 and self.name == "minimal":
             raise ConfigError(f"strategy={self.name} is invalid with a 3D flow: allowed naive, "
-                              "sto or policy (the minimal model reads the 2D signals n_theta "
-                              "and S_np)")
+                              "sto, optimised or policy (the minimal model reads the 2D "
+                              "signals n_theta and S_np)")
 
     def check_bound(self, shape_factor_max: float) -> None:
         """A naive shape factor (STO's amplitudes) must lie within ``[-Lambda_max,
@@ -195,7 +205,7 @@ def build_strategy(spec: StrategySpec, action_spec: Bounded, dim: int = 2
     Parameters
     ----------
     spec
-        ``naive``, ``sto`` or ``minimal`` (a policy is loaded with
+        ``naive``, ``sto``, ``minimal`` or ``optimised`` (a policy is loaded with
         :func:`~swimrl.runs.policy_files.load_policy`).
     action_spec
         The environment's ``action_spec_unbatched``.
@@ -217,6 +227,8 @@ def build_strategy(spec: StrategySpec, action_spec: Bounded, dim: int = 2
         return as_actor(ShortTimeOptimal(lam_max, spec.amplitudes))
     if spec.name == "minimal":
         return as_actor(MinimalModel(spec.coeffs, lam_max))
+    if spec.name == "optimised":
+        return as_actor(OptimisedRule(spec.coeffs, lam_max, signal_names(dim)))
     raise ValueError(f"strategy {spec.name!r} is not a baseline (load a policy file instead)")
 
 
