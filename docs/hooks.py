@@ -142,6 +142,8 @@ def record_listings(files: Files, config) -> list[File]:
                  "The files of this record folder (the policies' `.pt` files open from the "
                  "repository).", ""]
         for child in sorted(folder.iterdir()):
+            if child.name.startswith(".") and child.name != ".hydra":  # a run's lock file
+                continue
             name = child.name + ("/" if child.is_dir() else "")
             lines.append(f"- [`{name}`]({child.name}{'/' if child.is_dir() else ''})")
         pages.append(File.generated(config, f"{rel}/index.md", content="\n".join(lines) + "\n"))

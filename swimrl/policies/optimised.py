@@ -84,8 +84,9 @@ PRESETS: dict[str, RulePreset] = {
     "ku10_2d": RulePreset((1.957885931670428, 2.543642200661529, 1.5465418568375635,
                            1.7311190372714176, 0.26693241305068005, 0.34483952083513186),
                           SIGNAL_NAMES, 10.0, "docs/results/optimised_rules/ku10_2d/"),
-    "ku10_3d": RulePreset((2.805, 2.193, 0.753, 0.422, 0.0, 0.0), SIGNAL_NAMES_3D, 10.0,
-                          "docs/results/optimised_rules/ku10_3d/"),
+    "ku10_3d": RulePreset((2.352338417553584, 3.6574809363428997, 1.7175204244005036,
+                           1.2108340854928188, 0.478987136349457, 0.08913951685922156),
+                          SIGNAL_NAMES_3D, 10.0, "docs/results/optimised_rules/ku10_3d/"),
 }
 """The shipped coefficients, by regime: ``strategy=optimised strategy.preset=NAME``,
 ``compare.optimised_presets=[NAME]``; each names the signals it was optimised on and its

@@ -272,7 +272,7 @@ def validate(args) -> None:
     cands = distinct_best(state["evaluations"], args.top)
     x0 = tuple(s["x0"])
     rows = ["sto", x0] + [tuple(c["x"]) for c in cands]
-    labels = ["sto", "x0 (minimal fit, clipped)"] + [f"train #{c['i']}" for c in cands]
+    labels = ["sto", "x0 (the search's start)"] + [f"train #{c['i']}" for c in cands]
     log(f"validating {len(cands)} candidates + STO + x0 on seed {args.seed}: {args.flows} "
         f"flows x {args.swimmers} swimmers")
     t0 = time.perf_counter()
