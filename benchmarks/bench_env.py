@@ -42,10 +42,10 @@ import time
 
 import torch
 
-from swimrl.env import EnvParams, SwimmerEnv
+from swimrl.env import EnvParams, SwimmerEnv, env_from_flow
 from swimrl.flows.stochastic import StochasticFlow
 from swimrl.flows.stochastic3d import StochasticFlow3D
-from swimrl.physics.signals3d import SIGNAL_NAMES_3D
+from swimrl.physics.body3d import SIGNAL_NAMES_3D
 from swimrl.runtime import retain_freed_memory
 
 DEFAULT_BATCHES = ["1x1000", "10x100", "10x1000", "100x100", "1x10000", "10x10000", "1x100000"]
@@ -68,8 +68,8 @@ def measure(flows: int, swimmers: int, kernel: str, args) -> dict:
     if args.flow == "stochastic3d":
         flow = StochasticFlow3D(flows, args.kubo, n_waves=args.n_waves, device=args.device,
                                 generator=gen)
-        env = SwimmerEnv.build_from(flow, swimmers, EnvParams(signals=SIGNAL_NAMES_3D),
-                                    kernel=kernel)
+        env = env_from_flow(flow, swimmers, EnvParams(signals=SIGNAL_NAMES_3D),
+                            kernel=kernel)
     else:
         flow = StochasticFlow(flows, args.kubo, n_grid=args.n_grid, spacing=args.spacing,
                               device=args.device, generator=gen)

@@ -43,9 +43,9 @@ import numpy as np
 import torch
 
 from swimrl.flows.dns.grid import dealias_cutoff
+from swimrl.flows.dns.sources import DNSStore
 from swimrl.flows.dns.store import DNSStoreWriter
 from swimrl.flows.replay import ReplayFlow
-from swimrl.flows.sources import DNSStore
 
 
 def surrogate_store(path: Path, n: int = 512, n_times: int = 260, seed: int = 0) -> Path:

@@ -19,9 +19,9 @@ from pathlib import Path
 import matplotlib.pyplot as plt
 import torch
 
-from swimrl.env import EnvParams, SwimmerEnv
-from swimrl.flows.build import StochasticSpec
-from swimrl.physics.signals import SIGNAL_NAMES
+from swimrl.env import EnvParams, build_env
+from swimrl.flows.stochastic import StochasticSpec
+from swimrl.physics.body2d import SIGNAL_NAMES
 from swimrl.runtime import Runtime
 
 SMALL = os.environ.get("SWIMRL_EXAMPLE_SMALL") == "1"
@@ -45,7 +45,7 @@ flow = StochasticSpec(kubo=10.0, n_grid=64, spacing=0.1)       # a 6.4 ℓ_f per
 params = EnvParams(duration=2.0 if SMALL else 20.0)             # T / τ_K
 runtime = Runtime.from_names("cpu", "float32", threads=1, kernel="eager" if SMALL else "auto")
 runtime.apply()
-env = SwimmerEnv.build(flow, params, runtime, n_flows=2, n_swimmers=16, seed=0)
+env = build_env(flow, params, runtime, n_flows=2, n_swimmers=16, seed=0)
 print(env.batch_size, "swimmers;", params.n_decisions, "decisions of", params.n_substeps,
       "Heun steps each")
 space = env.action_spec_unbatched.space

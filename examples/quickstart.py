@@ -9,11 +9,11 @@
 # kernel (~30 s, once; it says so in one line).
 
 # %%
-from swimrl import EnvParams, Runtime, StochasticSpec, SwimmerEnv, load_policy
+from swimrl import EnvParams, Runtime, StochasticSpec, build_env, load_policy
 
 params = EnvParams()  # the paper's swimmer and episode: v_s = 0.707, T = 200 τ_K, T_u = 0.1 τ_K
-env = SwimmerEnv.build(StochasticSpec(kubo=10.0), params, Runtime.from_names("cpu", "float32", 1),
-                       n_flows=2, n_swimmers=100, seed=0)
+env = build_env(StochasticSpec(kubo=10.0), params, Runtime.from_names("cpu", "float32", 1),
+                n_flows=2, n_swimmers=100, seed=0)
 td = env.rollout(params.n_decisions, load_policy("pretrained/ku10", params))
 print(f"R_hat = {env.score(td[..., -1]['next']).mean():.3f}")
 

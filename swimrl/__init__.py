@@ -5,12 +5,12 @@ microswimmer navigation in turbulence*, arXiv:2603.08201.
 
 The names below are the public API, importable from ``swimrl`` directly::
 
-    from swimrl import EnvParams, Runtime, StochasticSpec, SwimmerEnv, load_policy
+    from swimrl import EnvParams, Runtime, StochasticSpec, build_env, load_policy
 
     params = EnvParams()                          # the paper's swimmer and episode
     runtime = Runtime.from_names("cpu", "float32", threads=1)
-    env = SwimmerEnv.build(StochasticSpec(kubo=10.0), params, runtime, n_flows=2,
-                           n_swimmers=100, seed=0)
+    env = build_env(StochasticSpec(kubo=10.0), params, runtime, n_flows=2,
+                    n_swimmers=100, seed=0)
     td = env.rollout(params.n_decisions, load_policy("pretrained/ku10", params))
     print(env.score(td[..., -1]["next"]).mean())  # R_hat, eq. (6) of the paper
 
@@ -29,21 +29,24 @@ __version__ = "0.1.0"
 #: environment, flows, physics, policies, evaluation, training, errors.
 _EXPORTS: dict[str, str] = {
     # environment (swimrl.env, swimrl.task, swimrl.runtime)
-    "SwimmerEnv": "swimrl.env",
-    "EnvParams": "swimrl.env",
+    "SwimmerEnv": "swimrl.env.core",
+    "build_env": "swimrl.env.build",
+    "EnvParams": "swimrl.env.params",
     "TaskSpec": "swimrl.task",
     "RewardSpec": "swimrl.task",
     "Runtime": "swimrl.runtime",
     # flows
-    "StochasticSpec": "swimrl.flows.build",
-    "StoredRunSpec": "swimrl.flows.build",
-    "LiveDNSSpec": "swimrl.flows.build",
+    "StochasticSpec": "swimrl.flows.stochastic",
+    "StoredRunSpec": "swimrl.flows.dns.flow",
+    "LiveDNSSpec": "swimrl.flows.dns.flow",
     "build_flow": "swimrl.flows.build",
     "GriddedFlow": "swimrl.flows.base",
     "CHANNELS": "swimrl.flows.base",
     # physics
-    "SIGNAL_NAMES": "swimrl.physics.signals",
-    "compute_signals": "swimrl.physics.signals",
+    "Body": "swimrl.physics.body",
+    "body": "swimrl.physics.body",
+    "SIGNAL_NAMES": "swimrl.physics.body2d",
+    "compute_signals": "swimrl.physics.body2d",
     "swimmer_rhs": "swimrl.physics.swimmer",
     "heun_step": "swimrl.physics.swimmer",
     "drag_factor": "swimrl.physics.energy",
@@ -71,6 +74,7 @@ _EXPORTS: dict[str, str] = {
 __all__ = [
     "__version__",
     "SwimmerEnv",
+    "build_env",
     "EnvParams",
     "TaskSpec",
     "RewardSpec",
@@ -81,6 +85,8 @@ __all__ = [
     "build_flow",
     "GriddedFlow",
     "CHANNELS",
+    "Body",
+    "body",
     "SIGNAL_NAMES",
     "compute_signals",
     "swimmer_rhs",
@@ -104,14 +110,19 @@ __all__ = [
 ]
 
 if TYPE_CHECKING:  # for type checkers and the API reference; at run time: __getattr__
-    from swimrl.env import EnvParams, SwimmerEnv
+    from swimrl.env.build import build_env
+    from swimrl.env.core import SwimmerEnv
+    from swimrl.env.params import EnvParams
     from swimrl.errors import ConfigError
     from swimrl.evaluation.compare import CompareConfig, compare
     from swimrl.evaluation.rollout import evaluate, evaluate_shared
     from swimrl.flows.base import CHANNELS, GriddedFlow
-    from swimrl.flows.build import LiveDNSSpec, StochasticSpec, StoredRunSpec, build_flow
+    from swimrl.flows.build import build_flow
+    from swimrl.flows.dns.flow import LiveDNSSpec, StoredRunSpec
+    from swimrl.flows.stochastic import StochasticSpec
+    from swimrl.physics.body import Body, body
+    from swimrl.physics.body2d import SIGNAL_NAMES, compute_signals
     from swimrl.physics.energy import drag_factor
-    from swimrl.physics.signals import SIGNAL_NAMES, compute_signals
     from swimrl.physics.swimmer import heun_step, swimmer_rhs
     from swimrl.policies.baselines import (
         MinimalModel,

@@ -2,7 +2,7 @@
 :mod:`swimrl.paper.config` with the functions of this module).
 
 Every ``*_config`` function only maps the config keys onto the typed objects of the library
-(:class:`~swimrl.env.EnvParams`, :class:`~swimrl.flows.build.StochasticSpec`,
+(:class:`~swimrl.env.EnvParams`, :class:`~swimrl.flows.stochastic.StochasticSpec`,
 :class:`~swimrl.rl.plan.TrainSettings`, ...); their constructors check every value and raise
 one :class:`~swimrl.errors.ConfigError` naming the key, the value and the allowed range. A
 command therefore validates its whole config once, before any compute, and the library
@@ -38,8 +38,8 @@ from swimrl.flows.dns.params import DNSParams
 from swimrl.flows.dns.run import DNSRun
 from swimrl.flows.labels import ku_name
 from swimrl.flows.registry import flow_dimension, flow_entry, flow_names
-from swimrl.physics.signals import SIGNAL_NAMES
-from swimrl.physics.signals3d import SIGNAL_NAMES_3D
+from swimrl.physics.body import body
+from swimrl.physics.body2d import DERIVED_NAMES, SIGNAL_NAMES
 from swimrl.policies.baselines import StrategySpec
 from swimrl.policies.networks import ModelSpec
 from swimrl.policies.optimised import RULE_COEFFS, preset_coefficients, resolve_coefficients
@@ -60,8 +60,8 @@ OmegaConf.register_new_resolver("ku", lambda kubo: ku_name(float(kubo)).removepr
 
 def all_signals(flow) -> list[str]:
     """``${all_signals:${flow}}`` (``conf/signals/all.yaml``): every signal of the flow's
-    dimension (:data:`~swimrl.physics.signals.SIGNAL_NAMES` or
-    :data:`~swimrl.physics.signals3d.SIGNAL_NAMES_3D`); the 2D set for a flow name that is
+    dimension (:data:`~swimrl.physics.body2d.SIGNAL_NAMES` or
+    :data:`~swimrl.physics.body3d.SIGNAL_NAMES_3D`); the 2D set for a flow name that is
     not registered (the flow's own check names it)."""
     node = OmegaConf.to_container(flow, resolve=True) if isinstance(flow, DictConfig) else flow
     if str(node.get("name")) not in flow_names():
@@ -69,11 +69,21 @@ def all_signals(flow) -> list[str]:
     try:
         dim = flow_dimension(node)
     except (ConfigError, KeyError, TypeError, ValueError):
-        dim = 2
-    return list(SIGNAL_NAMES_3D if dim == 3 else SIGNAL_NAMES)
+        return list(SIGNAL_NAMES)
+    return list(body(dim).signal_names)
 
 
 OmegaConf.register_new_resolver("all_signals", all_signals, replace=True)
+
+
+def all_invariant_signals(flow) -> list[str]:
+    """``${all_invariant_signals:${flow}}`` (``conf/signals/all_invariant.yaml``): every signal
+    of the flow's dimension (:func:`all_signals`) and the frame-invariant ``lever`` and
+    ``torque`` (:data:`~swimrl.physics.body2d.DERIVED_NAMES`)."""
+    return [*all_signals(flow), *DERIVED_NAMES]
+
+
+OmegaConf.register_new_resolver("all_invariant_signals", all_invariant_signals, replace=True)
 
 
 def _int(value):

@@ -21,7 +21,7 @@ class ConfigError(ValueError):
     """A config value outside its allowed range (one line naming key, value and range).
 
     Raised by the constructors of the typed configs (:class:`~swimrl.env.EnvParams`,
-    :class:`~swimrl.flows.build.StochasticSpec`, ...) before any compute; the commands print
+    :class:`~swimrl.flows.stochastic.StochasticSpec`, ...) before any compute; the commands print
     it as one line and exit with status 2.
     """
 

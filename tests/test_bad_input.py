@@ -165,6 +165,7 @@ def _tree(root: Path) -> dict[str, tuple[str, int]]:
             for p in sorted(root.rglob("*")) if p.is_file()}
 
 
+@pytest.mark.slow  # a two-job training sweep, run twice, in subprocesses (~15 s)
 def test_sweep_relaunch_with_resume_is_a_no_op(tmp_path):
     """``-m seed=0,1 resume=true`` over two finished jobs exits 0 and changes nothing."""
     sweep = tmp_path / "sweep"

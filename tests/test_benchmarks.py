@@ -14,12 +14,14 @@ import subprocess
 import sys
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 BENCH = Path(__file__).resolve().parents[1] / "benchmarks"
 #: The scripts the tests below run, one test each (test_every_script_has_a_smoke_test).
 COVERED = {"bench_env.py", "bench_train.py", "bench_dns.py", "bench_replay.py",
-           "bench_pyqg_reference.py", "bench_eval.py", "gpu_session.sh", "gpu_wheels.sh"}
+           "bench_pyqg_reference.py", "bench_eval.py", "gpu_session.sh", "gpu_wheels.sh",
+           "bit_for_bit.py"}
 NUMBER = re.compile(r"^[-+]?(\d+\.?\d*|\.\d+)([eE][-+]?\d+)?$")
 
 
@@ -67,6 +69,7 @@ def test_every_script_has_a_smoke_test():
     assert scripts == COVERED, f"give every benchmark a smoke test here: {scripts ^ COVERED}"
 
 
+@pytest.mark.slow  # the benchmark script end to end, three kernels (~8-12 s)
 def test_bench_env_smoke(tmp_path):
     out = script("bench_env.py", "--smoke", "--threads", "1", "--kernels", "eager", "fused",
                  "compiled", cwd=tmp_path)
@@ -93,6 +96,7 @@ def test_bench_env_3d_smoke(tmp_path):
             positive(value)
 
 
+@pytest.mark.slow  # the benchmark script end to end, two training layouts (~6-9 s)
 def test_bench_train_smoke(tmp_path):
     out = script("bench_train.py", "--smoke", "--out", str(tmp_path / "runs"), cwd=tmp_path)
     head, rows = table(out, "variant")
@@ -116,6 +120,7 @@ def test_bench_dns_smoke(tmp_path):
     assert rec["n"] == 32 and rec["ms_per_step"] > 0 and rec["ms_floor_step"] > 0
 
 
+@pytest.mark.slow  # the benchmark script end to end: DNS runs, replay, training (~12-20 s)
 def test_bench_replay_smoke(tmp_path):
     out = script("bench_replay.py", "--smoke", "--workdir", str(tmp_path / "work"), cwd=tmp_path)
     head, rows = table(out, "n_d")
@@ -145,6 +150,7 @@ def test_bench_pyqg_reference_smoke(tmp_path):
     positive(rows[0][1])
 
 
+@pytest.mark.slow  # the benchmark script end to end (~5-7 s)
 def test_bench_eval_smoke(tmp_path):
     out = script("bench_eval.py", "--smoke", cwd=tmp_path)
     head, rows = table(out, "run")
@@ -157,6 +163,7 @@ def test_bench_eval_smoke(tmp_path):
 
 
 @pytest.mark.skipif(shutil.which("bash") is None, reason="needs bash")
+@pytest.mark.slow  # all of gpu_session.sh on the CPU: benchmarks, training, records (~30 s)
 def test_gpu_session_cpu_dry_run(tmp_path):
     """``SMOKE=1 SKIP_TESTS=1 gpu_session.sh OUT cpu 160 1``: every step on the CPU at a tiny
     size, from a scratch directory; OUT holds the ten flat records."""
@@ -187,3 +194,35 @@ def test_gpu_wheels_parses():
     for name in ("gpu_wheels.sh", "gpu_session.sh"):
         proc = subprocess.run(["bash", "-n", str(BENCH / name)], capture_output=True, text=True)
         assert proc.returncode == 0, proc.stderr
+
+
+@pytest.mark.slow  # two trees: three evaluations, a resume, one figure on a fresh clone (~1-2 min)
+@pytest.mark.skipif(shutil.which("git") is None or not (BENCH.parent / ".git").exists(),
+                    reason="needs the git checkout")
+def test_bit_for_bit_tiny_against_head():
+    """``bit_for_bit.py --base HEAD --tiny``: the script runs end to end and finds this
+    checkout equal to its own HEAD's code (the committed code, in a worktree)."""
+    p = subprocess.run([sys.executable, str(BENCH / "bit_for_bit.py"), "--base", "HEAD",
+                        "--tiny"], cwd=BENCH.parent, capture_output=True, text=True,
+                       timeout=1200)
+    assert p.returncode == 0, p.stdout[-3000:] + p.stderr[-3000:]
+    assert "PASS: bit for bit" in p.stdout
+    assert p.stdout.count(": equal") == 4  # three evaluations and the resume
+
+
+def test_bit_for_bit_comparison_finds_a_difference(tmp_path):
+    """The comparison can fail: one changed number in the trajectories or the metrics."""
+    spec = importlib.util.spec_from_file_location("bit_for_bit", BENCH / "bit_for_bit.py")
+    mod = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(mod)
+    a, b = tmp_path / "a", tmp_path / "b"
+    for d in (a, b):
+        d.mkdir()
+        np.savez(d / "trajectories.npz", Lambda=np.arange(6.0).reshape(2, 3))
+        (d / "metrics.json").write_text(json.dumps({"per_flow": [0.5, 0.6]}))
+    assert mod.same_eval(a, b) is None
+    np.savez(b / "trajectories.npz", Lambda=np.arange(6.0).reshape(2, 3) + 1e-12)
+    assert "Lambda" in mod.same_eval(a, b)
+    np.savez(b / "trajectories.npz", Lambda=np.arange(6.0).reshape(2, 3))
+    (b / "metrics.json").write_text(json.dumps({"per_flow": [0.5, 0.6000001]}))
+    assert "per_flow" in mod.same_eval(a, b)

@@ -1,6 +1,6 @@
-"""Figures beyond the paper (swimrl.paper.beyond): the Pareto front, and both
-figures drawn from tiny ``swimrl-compare`` records (``task=target`` at two distances; the
-displacement task with energies), or reported pending without them."""
+"""Figures beyond the paper (swimrl.paper.beyond_target, beyond_paths, beyond_energy): the
+Pareto front, and the figures drawn from tiny ``swimrl-compare`` records (``task=target`` at
+two distances; the displacement task with energies), or reported pending without them."""
 
 from __future__ import annotations
 
@@ -13,7 +13,7 @@ import pytest
 
 from swimrl.config import compare_config
 from swimrl.evaluation.compare import compare
-from swimrl.paper import beyond
+from swimrl.paper import beyond_energy, beyond_paths, beyond_target
 from swimrl.paper.config import figures_config
 from swimrl.runs.policy_files import PRETRAINED_ROOT
 
@@ -27,19 +27,20 @@ def test_pareto_front():
     r = np.array([0.5, 0.6, 0.4, 0.6, 0.3])
     e = np.array([1.0, 1.5, 1.2, 1.4, 0.9])
     # 2 is dominated by 0, 1 by 3 (same R_hat, more energy)
-    assert beyond.pareto_front(r, e).tolist() == [4, 0, 3]
+    assert beyond_energy.pareto_front(r, e).tolist() == [4, 0, 3]
 
 
 def test_labels_of_rows():
-    assert beyond.row_kind("sto") == "target-STO"
-    assert beyond.row_kind("naive(-0.98)") == "naive"
-    assert beyond.row_kind("policy(pretrained/ku10)") == "displacement policy"
-    assert beyond.row_kind("policy(outputs/beyond/target_ku10_seed1)") == "smart (target)"
-    assert (beyond.row_kind("policy(docs/results/beyond/runs/target_ku10_warm_seed0/policy.pt)")
-            == "smart (warm start)")
-    assert beyond.energy_weight("policy(docs/results/beyond/energy_ku10_w0.3_seed2)") == 0.3
-    assert beyond.energy_weight("policy(docs/results/paper_runs/ku10_seed0/policy.pt)") == 0.0
-    assert beyond.energy_weight("naive(+0.98)") is None
+    assert beyond_target.row_kind("sto") == "target-STO"
+    assert beyond_target.row_kind("naive(-0.98)") == "naive"
+    assert beyond_target.row_kind("policy(pretrained/ku10)") == "displacement policy"
+    assert beyond_target.row_kind("policy(outputs/beyond/target_ku10_seed1)") == "smart (target)"
+    warm = "policy(docs/results/beyond/runs/target_ku10_warm_seed0/policy.pt)"
+    assert beyond_target.row_kind(warm) == "smart (warm start)"
+    assert beyond_energy.energy_weight("policy(docs/results/beyond/energy_ku10_w0.3_seed2)") == 0.3
+    protocol = "policy(docs/results/paper_runs/ku10_seed0/policy.pt)"
+    assert beyond_energy.energy_weight(protocol) == 0.0
+    assert beyond_energy.energy_weight("naive(+0.98)") is None
 
 
 @pytest.fixture
@@ -52,8 +53,8 @@ def figures(compose_cfg, tmp_path):
 
 
 def test_pending_without_records(figures):
-    assert "pending" in beyond.build_beyond_target(figures)
-    assert "pending" in beyond.build_beyond_energy(figures)
+    assert "pending" in beyond_target.build_beyond_target(figures)
+    assert "pending" in beyond_energy.build_beyond_energy(figures)
 
 
 def _compare(compose_cfg, out, over):
@@ -76,7 +77,7 @@ def test_figures_from_comparison_records(compose_cfg, figures, tmp_path):
     _compare(compose_cfg, tmp_path / "beyond" / "energy" / "ku10",
              ["flow.kubo=10", "compare.strategies=[sto,naive,policy]",
               f"compare.policies=[pretrained/ku10,{energy}]"])
-    out = beyond.build_beyond_target(figures)
+    out = beyond_target.build_beyond_target(figures)
     assert (tmp_path / "fig" / "beyondTarget.png").is_file()
     summary = out["summary"][10.0]
     assert set(summary) == {"1.0", "2.0"}
@@ -87,19 +88,19 @@ def test_figures_from_comparison_records(compose_cfg, figures, tmp_path):
                 key=lambda r: r["arrival_mean"])
     assert summary["1.0"]["best naive"]["arrival"] == naive["arrival_mean"]
     assert "| Ku = 10 | 1 | target-STO |" in (tmp_path / "fig" / "beyondTarget.md").read_text()
-    out = beyond.build_beyond_energy(figures)
+    out = beyond_energy.build_beyond_energy(figures)
     assert (tmp_path / "fig" / "beyondEnergy.png").is_file()
     assert out["ku10"]["front"]  # at least one non-dominated row
     assert (tmp_path / "fig" / "beyondEnergyMaps.png").is_file()
     assert out["maps"] == {"ku10_w0": "pretrained/ku10", "ku10_w0.3": str(energy)}
-    out = beyond.build_beyond_target_paths(figures)
+    out = beyond_paths.build_beyond_target_paths(figures)
     assert (tmp_path / "fig" / "beyondTargetPaths.png").is_file()
     assert out["ku10"]["distance"] == 2.0  # the middle of D = 1, 2
     assert set(out["ku10"]["actors"]) == {"target-STO", "best naive", "displacement policy",
                                           "smart (target)"}
     cache = next((tmp_path / "cache").glob("target_paths_ku10_D2-*.npz"))
     a = np.load(cache)
-    xy = beyond.target_frame(a["position"][0], a["target"][0])
+    xy = beyond_paths.target_frame(a["position"][0], a["target"][0])
     gap = np.linalg.norm(xy[..., -1, :] - [2.0, 0.0], axis=-1)
     arrived = np.isfinite(a["arrival_time"][0])
     # an arrived swimmer ends within the arrival radius of its target and stops there
@@ -114,7 +115,7 @@ def test_target_frame():
     path = start[:, None, :] + rng.normal(size=(5, 7, 2)).cumsum(1)
     path[:, 0] = start
     path[:, -1] = target
-    xy = beyond.target_frame(path, target)
+    xy = beyond_paths.target_frame(path, target)
     d = np.linalg.norm(target - start, axis=-1)
     assert np.allclose(xy[:, 0], 0.0)
     assert np.allclose(xy[:, -1], np.stack([d, np.zeros(5)], -1))
@@ -122,9 +123,9 @@ def test_target_frame():
 
 
 def test_sto_amplitudes_of_rows():
-    assert beyond.sto_amplitudes("sto", 0.98) == (0.98, 0.98)
-    assert beyond.sto_amplitudes("sto(+0.90,-0.20)", 0.98) == (0.9, 0.2)
-    assert beyond.sto_amplitudes("naive(+0.98)", 0.98) is None
+    assert beyond_energy.sto_amplitudes("sto", 0.98) == (0.98, 0.98)
+    assert beyond_energy.sto_amplitudes("sto(+0.90,-0.20)", 0.98) == (0.9, 0.2)
+    assert beyond_energy.sto_amplitudes("naive(+0.98)", 0.98) is None
 
 
 def test_energy_baselines_join_the_energy_record_on_the_same_flows(tmp_path):
@@ -139,12 +140,12 @@ def test_energy_baselines_join_the_energy_record_on_the_same_flows(tmp_path):
 
     record(tmp_path / "energy" / "ku10", ["sto", "naive(+0.98)"])
     record(tmp_path / "energy_baselines" / "ku10", ["sto(+0.98,-0.98)", "sto(+0.60,-0.00)"])
-    rows = [r["label"] for r in beyond.read_energy(tmp_path)[10.0]["rows"]]
+    rows = [r["label"] for r in beyond_energy.read_energy(tmp_path)[10.0]["rows"]]
     assert rows == ["sto", "naive(+0.98)", "sto(+0.98,-0.98)", "sto(+0.60,-0.00)"]
     shutil.rmtree(tmp_path / "energy_baselines")
     record(tmp_path / "energy_baselines" / "ku10", ["sto(+0.60,-0.00)"], seed=1)
     with pytest.raises(ValueError, match="energy_baselines/ku10/comparison.json: not the flows"):
-        beyond.read_energy(tmp_path)
+        beyond_energy.read_energy(tmp_path)
 
 
 def _target_row(label, arrived, half, with_cdf=True):
@@ -179,7 +180,7 @@ def test_target_figure_draws_the_arrival_time_cdf_where_recorded(figures, tmp_pa
     restricted mean times in the table; records without: the median of the arrived, ``—``."""
     for d in (10.0, 20.0, 40.0):
         _target_record(tmp_path / "beyond" / "target" / f"ku10_D{d:g}", d, with_cdf)
-    out = beyond.build_beyond_target(figures)
+    out = beyond_target.build_beyond_target(figures)
     assert (tmp_path / "fig" / "beyondTarget.png").is_file()
     assert out["cdf_distance"] == {10.0: 20.0 if with_cdf else None}
     table = (tmp_path / "fig" / "beyondTarget.md").read_text()

@@ -133,6 +133,7 @@ def test_gae_has_no_graph_break_and_equals_torchrl_gae(trainer_and_batch):
     torch.testing.assert_close(compiled["advantage"], ref["advantage"], rtol=1e-5, atol=1e-6)
 
 
+@pytest.mark.slow  # torch.compile of the loss and its backward, fullgraph (~15 s)
 def test_loss_has_no_graph_break_and_the_gradient_step_no_host_sync(trainer_and_batch):
     """The clipped-PPO loss compiles with ``fullgraph=True`` (its backward is AOTAutograd's
     compiled graph) and equals the eager loss; the compiled loss, its backward and the

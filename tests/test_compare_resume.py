@@ -9,8 +9,9 @@ from pathlib import Path
 
 import pytest
 
+import swimrl.evaluation.rollout
 from swimrl.config import compare_config
-from swimrl.env import SwimmerEnv
+from swimrl.env import build_env
 from swimrl.errors import BadFileError, ConfigError
 from swimrl.evaluation.compare import compare
 from swimrl.policies import pretrained
@@ -30,13 +31,13 @@ def _config(compose_cfg, *over):
 
 def _count_builds(monkeypatch) -> list:
     calls = []
-    build = SwimmerEnv.build
+    build = build_env
 
     def counted(*args, **kwargs):
         calls.append(args[-1])  # the chunk seed
         return build(*args, **kwargs)
 
-    monkeypatch.setattr(SwimmerEnv, "build", staticmethod(counted))
+    monkeypatch.setattr(swimrl.evaluation.rollout, "build_env", counted)
     return calls
 
 
@@ -85,6 +86,7 @@ def test_malformed_partial_is_refused(compose_cfg, tmp_path):
         compare(_config(compose_cfg, "compare.resume=true"), partial)
 
 
+@pytest.mark.slow  # four swimrl-compare processes (resume in-process: tests above) (~20 s)
 def test_cli_resume(compose_cfg, tmp_path):
     """The command: a run directory holding a partial comparison is refused in one line without
     compare.resume (or overwrite) and left as it was; with it the comparison completes as the

@@ -31,12 +31,12 @@ from swimrl.errors import ConfigError
 from swimrl.evaluation.compare import CompareConfig, strategy_variants
 from swimrl.evaluation.rollout import EvalConfig
 from swimrl.flows.analytic import ABCSpec, LinearSpec, TaylorGreenSpec
-from swimrl.flows.build import LiveDNSSpec, StochasticSpec, StoredRunSpec
+from swimrl.flows.dns.flow import LiveDNSSpec, StoredRunSpec
 from swimrl.flows.dns.params import DNSParams
 from swimrl.flows.dns.run import DNSRun
-from swimrl.flows.stochastic import StochasticFlow
+from swimrl.flows.stochastic import StochasticFlow, StochasticSpec
 from swimrl.flows.stochastic3d import Stochastic3DSpec, StochasticFlow3D
-from swimrl.paper.records import DNSFiguresConfig, FiguresConfig
+from swimrl.paper.settings import DNSFiguresConfig, FiguresConfig
 from swimrl.policies.baselines import StrategySpec
 from swimrl.policies.networks import ModelSpec, make_mlp, tanh_normal_actor, value_critic
 from swimrl.rl.plan import LossSettings, OptimSettings, TrainConfig, TrainSettings
@@ -134,7 +134,7 @@ READ = (StochasticSpec, StoredRunSpec, LiveDNSSpec, StochasticFlow.__init__, DNS
 #: ``RewardSpec()``, whose own defaults are read).
 WRITTEN = {
     "StochasticFlow.__init__": ("dtype", "generator"),
-    "SwimmerEnv.__init__": ("generator", "ic_blocks"),
+    "SwimmerEnv.__init__": ("generator", "ic_blocks", "body"),
     # signals: the 2D set SIGNAL_NAMES (conf/signals/all.yaml gives the flow's dimension's set,
     # an interpolation; test_swimmer_episode_signals_and_runtime checks it composes to this)
     "EnvParams": ("task", "reward", "signals"),
@@ -231,7 +231,8 @@ def test_swimmer_episode_signals_and_runtime(name):
     for runtime in (Runtime, Runtime.from_names):
         assert "threads" not in defaults(runtime)
         assert_defaults_are_the_yaml(runtime, cfg)
-    assert_defaults_are_the_yaml(SwimmerEnv.__init__, cfg, library_only=("generator", "ic_blocks"))
+    assert_defaults_are_the_yaml(SwimmerEnv.__init__, cfg, library_only=("generator", "ic_blocks",
+                                                                       "body"))
 
 
 @pytest.mark.parametrize("name", EVALUATING)

@@ -11,8 +11,8 @@ from hydra import compose, initialize_config_module
 
 from swimrl.config import dns_run
 from swimrl.flows.dns.run import run_dns
+from swimrl.flows.dns.sources import DNSStore
 from swimrl.flows.dns.store import DNSStoreWriter
-from swimrl.flows.sources import DNSStore
 
 torch.set_num_threads(1)
 

@@ -12,6 +12,7 @@ import torch
 from hydra import compose, initialize_config_module
 
 from swimrl.paper import dns as dfig
+from swimrl.paper import dns_replay, dns_transfer, evaluations
 from swimrl.paper.config import figures_config
 from swimrl.policies.baselines import StrategyLabel
 
@@ -35,16 +36,16 @@ def test_transfer_summary_pairs_each_flow_with_sto(tmp_path):
                                  "minimal(ku10)": [0.9, 1.8], "naive(+0.98)": [0.5, 1.0]})
     _comparison(tmp_path / "1", {"sto": [1.0, 1.0], "policy(pretrained/ku10)": [1.0, 1.2],
                                  "minimal(ku10)": [1.1, 0.9], "naive(+0.98)": [0.5, 0.5]})
-    per = dfig.read_transfer(tmp_path)
+    per = dns_transfer.read_transfer(tmp_path)
     assert per["realisation"].tolist() == [0, 0, 1, 1]
-    s = dfig.transfer_summary(per)
+    s = dns_transfer.transfer_summary(per)
     smart = s["policy(pretrained/ku10)"]
     assert smart["ratio"] == pytest.approx(6.2 / 5)  # the ratio of the means, paired
     assert smart["ratio_realisations"] == pytest.approx([4.0 / 3, 1.1])
     assert smart["ratio_realisation_std"] == pytest.approx(np.std([4.0 / 3, 1.1], ddof=1))
     assert s["naive(+0.98)"]["ratio"] == pytest.approx(0.5)
     assert s["sto"]["ratio_realisation_std"] == 0 and s["sto"]["n_realisations"] == 2
-    table = dfig.transfer_markdown(s)
+    table = dns_transfer.transfer_markdown(s)
     assert "| policy(pretrained/ku10) |" in table and "1.240 ±" in table and "1.333, 1.100" in table
     ku_of = lambda label: StrategyLabel.parse(label).kubo  # noqa: E731
     assert ku_of("policy(pretrained/ku1e7)") == 1e7
@@ -57,7 +58,7 @@ def test_trained_ratio_per_realisation_and_its_spread_over_runs(tmp_path):
                                  "policy(a)": [1.0, 1.0], "policy(b)": [1.4, 1.4]})
     _comparison(tmp_path / "1", {"sto": [1.0, 1.0], "policy(pretrained/ku10)": [1.0, 1.0],
                                  "policy(a)": [0.5, 1.5], "policy(b)": [1.0, 1.5]})
-    r = dfig.trained_ratio(dfig.read_transfer(tmp_path), "policy(pretrained/ku10)",
+    r = dns_transfer.trained_ratio(dns_transfer.read_transfer(tmp_path), "policy(pretrained/ku10)",
                            ["policy(a)", "policy(b)"])
     np.testing.assert_allclose(r["per_realisation"], [[1.4, 1.0], [1.0, 0.8]])
     assert r["realisation_mean"] == pytest.approx([1.2, 0.9])
@@ -65,9 +66,9 @@ def test_trained_ratio_per_realisation_and_its_spread_over_runs(tmp_path):
                                                             np.std([1.0, 0.8], ddof=1)])
     assert r["overall"] == pytest.approx([4.8 / 4.0, 4.8 / 5.3])
     assert r["overall_std_over_runs"] == pytest.approx(np.std(r["overall"], ddof=1))
-    table = dfig.trained_ratio_markdown(r, dfig.realisation_names(tmp_path))
+    table = dns_transfer.trained_ratio_markdown(r, dns_transfer.realisation_names(tmp_path))
     assert "| 0 | 1.400 | 1.000 | 1.200 |" in table and "| all flows | 1.200 |" in table
-    assert "| 2 | 1.400 |" in dfig.trained_ratio_markdown(r, ["2", "3"])
+    assert "| 2 | 1.400 |" in dns_transfer.trained_ratio_markdown(r, ["2", "3"])
 
 
 def test_dns_trained_must_be_one_of_the_trained_seeds():
@@ -135,11 +136,11 @@ def test_replay_record_is_made_once_from_the_store_and_read_after(tmp_path):
                   policy="naive(-0.5)", trained="naive(0.5)", trained_seeds=("naive(0.5)",),
                   curves=(), n_swimmers=5,
                   n_traj=2, decode_n=None)
-    missing, why = dfig.dns_record(cfg, replace(dns, policy="nowhere/policy.pt"))
+    missing, why = dns_replay.dns_record(cfg, replace(dns, policy="nowhere/policy.pt"))
     assert missing is None and "dns.policy" in why and not dns.record.exists()
-    a, why = dfig.dns_record(cfg, dns)
+    a, why = dns_replay.dns_record(cfg, dns)
     assert dns.record.exists() and why == ""
-    frames = 1 + 10 // dfig.FRAME_EVERY  # every FRAME_EVERY decisions of 10
+    frames = 1 + 10 // evaluations.FRAME_EVERY  # every FRAME_EVERY decisions of 10
     assert a["cloud"].shape == (3, 5, frames, 2) and a["smart_path"].shape == (2, 11, 2)
     assert a["smart_Lambda"].shape == (2, 10) and np.allclose(a["smart_Lambda"], -0.5)
     for other in ("n_theta", "omega"):  # the 'trained' block: constant Lambda = 0.5
@@ -153,16 +154,16 @@ def test_replay_record_is_made_once_from_the_store_and_read_after(tmp_path):
     dist = np.linalg.norm(final, axis=-1)  # box units, as reference_distance
     assert dist / float(a["reference_distance"]) == pytest.approx(a["R_hat"][0, :2], rel=1e-4)
     assert a["vorticity"].shape[0] == 2 and math.isclose(float(a["time"][-1]), 1.0)
-    summary = dfig.replay_summary(a)
+    summary = dns_replay.replay_summary(a)
     assert list(summary) == ["naive(-0.5)", "naive", "sto", "naive(0.5)"]
     assert summary["naive(-0.5)"]["R_hat"] == pytest.approx(float(a["R_hat"][0].mean()))
     assert summary["naive(-0.5)"]["distance_L"] == pytest.approx(  # box units, as dist
         float(a["R_hat"][0].mean() * a["reference_distance"]))
-    assert "| sto |" in dfig.replay_markdown(summary, "run.zarr")
+    assert "| sto |" in dns_replay.replay_markdown(summary, "run.zarr")
     store.rename(tmp_path / "gone.zarr")
-    b, _ = dfig.dns_record(cfg, dns)
+    b, _ = dns_replay.dns_record(cfg, dns)
     assert all(np.array_equal(a[k], b[k], equal_nan=a[k].dtype.kind == "f") for k in a)
-    other, why = dfig.dns_record(cfg, replace(dns, n_swimmers=6))  # made with other inputs
+    other, why = dns_replay.dns_record(cfg, replace(dns, n_swimmers=6))  # made with other inputs
     assert other is None and "n_swimmers" in why
     v = video_cloud(b, "DNS", tmp_path / "v10.mp4", fps=2, unit="L")
     t = video_trajectories(b, "DNS", tmp_path / "v5.mp4", fps=2, unit="L")

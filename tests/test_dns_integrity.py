@@ -29,9 +29,9 @@ from swimrl.errors import IntegrityError
 from swimrl.flows.dns import store as store_module
 from swimrl.flows.dns.integrity import RMS_FACTOR, SnapshotCheck
 from swimrl.flows.dns.run import run_dns
+from swimrl.flows.dns.sources import DNSStore
 from swimrl.flows.dns.store import DNSStoreWriter, store_record
 from swimrl.flows.dns.verify import verify_store
-from swimrl.flows.sources import DNSStore
 
 from .conftest import SMALL as EVAL_SMALL
 
@@ -172,7 +172,7 @@ def test_old_store_without_checksums_reads_the_same_with_one_warning(clean, tmp_
     old = _run(tmp_path / "old.zarr")
     monkeypatch.undo()
     assert zarr.open_group(str(old), mode="r")["omega_hat"].compressors == ()
-    with caplog.at_level(logging.WARNING, logger="swimrl.flows.sources"):
+    with caplog.at_level(logging.WARNING, logger="swimrl.flows.dns.sources"):
         s = DNSStore(old)
         again = DNSStore(old)
     warned = [r.getMessage() for r in caplog.records if r.levelno == logging.WARNING]

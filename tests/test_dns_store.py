@@ -18,8 +18,8 @@ from hydra import compose, initialize_config_module
 from swimrl.config import dns_run
 from swimrl.flows.dns import DNSParams, SpectralGrid, flow_channels
 from swimrl.flows.dns.run import run_dns as _run_dns
+from swimrl.flows.dns.sources import DNSStore
 from swimrl.flows.dns.store import DNSStoreWriter
-from swimrl.flows.sources import DNSStore
 
 torch.set_num_threads(1)
 
@@ -159,6 +159,7 @@ def test_plots_from_a_small_store(tmp_path):
     assert set(summary["moments"]) == {"omega", "S_xx", "S_xy"}
 
 
+@pytest.mark.slow  # two DNS runs, then swimrl-dns-plots over them (~10-15 s)
 def test_checks_across_independent_runs(tmp_path):
     """swimrl-dns-plots A B: per-run summaries, stability of u_rms and tau_K through each
     stored window, pooled PDFs and the resolution check over every run."""

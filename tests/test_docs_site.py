@@ -47,6 +47,7 @@ def site(tmp_path_factory):
     return proc, out
 
 
+@pytest.mark.slow  # builds the docs site (~15 s; needs the docs extras)
 def test_the_site_builds_strictly_and_mentions_no_link(site):
     proc, _ = site
     log = proc.stdout + proc.stderr
@@ -73,6 +74,7 @@ def local_targets(page: Path, out: Path):
         yield url, target, parts.fragment
 
 
+@pytest.mark.slow  # the built docs site
 def test_every_link_of_the_built_site_resolves(site):
     """Every relative href and src of every page points at a file of the site, and every
     #anchor into a page at an id of that page."""
@@ -95,6 +97,7 @@ def test_every_link_of_the_built_site_resolves(site):
     assert bad == [], "\n".join(bad[:50])
 
 
+@pytest.mark.slow  # the built docs site
 def test_the_site_has_the_figures_equations_and_example_outputs(site):
     _, out = site
     reproduction = (out / "reproduction.html").read_text(encoding="utf-8")

@@ -7,7 +7,7 @@ import torch
 from torchrl.envs.utils import check_env_specs
 
 from swimrl.config import eval_setup
-from swimrl.env import EnvParams, SwimmerEnv
+from swimrl.env import EnvParams, SwimmerEnv, build_env
 from swimrl.flows.stochastic import StochasticFlow
 from swimrl.policies.baselines import ShortTimeOptimal, as_actor
 
@@ -126,7 +126,7 @@ def test_rotational_noise_diffuses_the_orientation():
 
 def test_build_env_from_config(compose_cfg):
     setup = eval_setup(compose_cfg(SMALL + ["signals=nth_snp"]))
-    env = SwimmerEnv.build(setup.flow, setup.params, setup.runtime, 2, 3, 0)
+    env = build_env(setup.flow, setup.params, setup.runtime, 2, 3, 0)
     td = env.reset()
     assert td["observation"].shape == (2, 3, 2)
     assert torch.equal(td["observation"], td["signals"][..., [1, 3]])

@@ -14,7 +14,15 @@ import numpy as np
 import pytest
 
 from swimrl.errors import BadFileError, ConfigError
-from swimrl.paper import mechanism, records, robustness
+from swimrl.paper import (
+    decision_stats,
+    evaluations,
+    map_evaluations,
+    mechanism,
+    records,
+    robustness,
+    settings,
+)
 from swimrl.paper.config import figures_config
 from swimrl.runs.policy_files import PRETRAINED_ROOT
 
@@ -34,7 +42,7 @@ def tiny(compose_cfg, tmp_path):
         for seed in (0, 1):
             shutil.copytree(PRETRAINED_ROOT / name, tmp_path / "runs" / f"{name}_seed{seed}")
 
-    def make(*overrides: str) -> records.FiguresConfig:
+    def make(*overrides: str) -> settings.FiguresConfig:
         cfg = figures_config(compose_cfg([*TINY, *overrides], name="figures"))
         return replace(cfg, out=tmp_path / "fig", cache=tmp_path / "cache",
                        records=tmp_path / "records", policies=str(tmp_path / "policies"),
@@ -67,7 +75,7 @@ def test_missing_record_is_computed_written_and_read_back_equal(tiny):
     assert ev["actors"] == {"smart": policy, "naive": "naive", "STO": "sto"}
     assert ev["files"] == {policy: records.sha256_file(Path(policy) / "policy.pt")}
     assert all(len(v) == 2 for v in ev["per_flow"].values())
-    want = records.flow_summary(ev["per_flow"], [("smart", "STO")])
+    want = evaluations.flow_summary(ev["per_flow"], [("smart", "STO")])
     assert ev["derived"]["mean"] == pytest.approx(want["mean"])
     assert ev["derived"]["ratio"]["smart/STO"]["value"] == pytest.approx(
         np.mean(ev["per_flow"]["smart"]) / np.mean(ev["per_flow"]["STO"]))
@@ -167,8 +175,8 @@ def test_mechanism_records_hold_per_seed_statistics(tiny):
     assert ev["derived"]["snn"]["n"] == 60 and len(ev["per_flow"]["smart"]) == 2
     seeds = rec["derived"]["per_seed"]
     assert seeds["1"]["p_pos_given_low"] == ev["derived"]["snn"]["p_pos_given_low"]
-    arrays = mechanism.map_record(cfg, mechanism.map_evaluation(cfg, 1e7, 0))
-    assert out["snn"] == mechanism.snn_statistic(arrays)
+    arrays = map_evaluations.map_record(cfg, map_evaluations.map_evaluation(cfg, 1e7, 0))
+    assert out["snn"] == decision_stats.snn_statistic(arrays)
     assert arrays["map_omega_count"].sum() <= 60 and arrays["sample_Lambda"].size > 0
     assert (cfg.out / "kuInf.png").stat().st_size > 1000
 
@@ -195,13 +203,13 @@ def test_every_record_at_tiny_sizes_and_no_input_under_shipped_before(tiny, monk
                "figures.durations=[0.5,1.0]", "figures.update_intervals=[0.1,0.2]",
                "figures.swim_speeds=[0.707]")
     built = {}
-    for name in records.RECORDED:
+    for name in settings.RECORDED:
         built.update(build_figures(replace(cfg, only=name), log=lambda _: None))
     assert not any("pending" in v for v in built.values())
-    for name in records.RECORDED:
+    for name in settings.RECORDED:
         rec = records.read_figure_record(cfg.records / f"{name}.json")
         named = [*rec["sources"], *(f for e in rec["evaluations"].values() for f in e["files"])]
-        assert not [f for f in named if records.under_shipped_before(f)], name
+        assert not [f for f in named if settings.under_shipped_before(f)], name
     ablation = json.loads((cfg.records / "ablation.json").read_text())
     sets = {tuple(s["signals"]): s for s in ablation["derived"]["signal_sets"]}
     assert sets[("n_theta", "S_np")]["seeds"] == [0, 1, 2]
@@ -212,7 +220,7 @@ def test_every_record_at_tiny_sizes_and_no_input_under_shipped_before(tiny, monk
     assert perf["derived"]["protocol"]["ku10"]["n_flows"] == 100
     pattern = json.loads((cfg.records / "ku_pattern.json").read_text())
     assert set(pattern["derived"]["ku10"]["map_correlation"]) == {"n_theta", "omega"}
-    from swimrl.paper.dns import shipped_before_inputs
+    from swimrl.paper.dns_replay import shipped_before_inputs
 
     assert shipped_before_inputs(cfg.dns) == []
     dns = build_figures(replace(cfg, only="dnsFlow"), log=lambda _: None)["dnsFlow"]
@@ -251,7 +259,7 @@ def test_ku01_record_gains_the_sign_agreement_and_nothing_else_changes(tiny, tmp
     path.write_text(json.dumps(old, indent=2))
     mechanism.build_ku01(cfg)
     new = json.loads(path.read_text())
-    assert mechanism._changed(old, new) is None  # only added
+    assert records._changed(old, new) is None  # only added
     added = new["evaluations"]["ku0.1_seed1"]["derived"]["sign_STO"]
     assert added.pop("resimulated") == {"per_flow_max_abs_diff": 0.0, "same_decisions": True}
     assert added == signs[1] and new["derived"]["per_seed"] == per

@@ -15,7 +15,17 @@ import pytest
 from swimrl.analysis.performance import load, summarise
 from swimrl.analysis.policy_maps import binned_mean, snn_extremes
 from swimrl.analysis.training_curves import PAPER_EPISODE_FRAMES
-from swimrl.paper import ablation, mechanism, records, robustness, stochastic, training
+from swimrl.paper import (
+    ablation,
+    decision_stats,
+    evaluations,
+    mechanism,
+    records,
+    robustness,
+    settings,
+    stochastic,
+    training,
+)
 from swimrl.paper.build import BUILDERS
 from swimrl.paper.config import figures_config
 
@@ -62,37 +72,37 @@ def test_streamed_decision_statistics_equal_the_one_shot_ones():
     sig, lam = _record(400, 50)
     sig[..., 2] = RNG.normal(size=sig.shape[:2])
     lam = np.where(sig[..., 2] < -2, 0.9, lam)
-    st = mechanism.DecisionStats()
+    st = decision_stats.DecisionStats()
     for i in range(sig.shape[1]):
         st.add(sig[:, i], lam[:, i])
     a = st.arrays()
-    mean, edges = mechanism.map_mean(a, "n_theta")
+    mean, edges = decision_stats.map_mean(a, "n_theta")
     ref, _, _ = binned_mean(lam, [sig[..., 3], sig[..., 1]], bins=30,
                             ranges=[(e[0], e[-1]) for e in edges], min_count=5)
     assert np.allclose(mean, ref, equal_nan=True) and np.isfinite(mean).sum() > 500
     assert edges[1][0] == -1 and edges[0][-1] == -edges[0][0]
-    got, want = mechanism.snn_statistic(a), snn_extremes(sig[..., 2], lam)
+    got, want = decision_stats.snn_statistic(a), snn_extremes(sig[..., 2], lam)
     assert got["n"] == want["n"] == lam.size
     assert abs(got["n_low"] - want["n_low"]) <= 3 and abs(got["n_high"] - want["n_high"]) <= 3
     assert got["p_pos_given_low"] == pytest.approx(want["p_pos_given_low"], abs=0.02)
     assert got["p_neg_given_high"] == pytest.approx(want["p_neg_given_high"], abs=0.02)
-    assert mechanism.correlation(a) == pytest.approx(
+    assert decision_stats.correlation(a) == pytest.approx(
         np.corrcoef((sig[..., 1] * sig[..., 3]).ravel(), lam.ravel())[0, 1])
-    assert mechanism.map_correlation(a, a, "omega") == pytest.approx(1.0)
+    assert decision_stats.map_correlation(a, a, "omega") == pytest.approx(1.0)
 
 
 def test_figure_functions_on_tiny_records(tmp_path):
     sig, lam = _record()
     n_dec = sig.shape[1]
     traj = np.cumsum(RNG.normal(0, 0.1, (3, 2, n_dec + 1, 2)), axis=2)
-    stats = mechanism.decision_stats(sig, lam)
+    stats = decision_stats.decision_stats(sig, lam)
     out = mechanism.fig_ku01(traj, stats, sig[:2], np.sign(sig[:2, :, 1]), tmp_path / "a.png")
     assert out["corr_smart"] > 0.8 and (tmp_path / "a.png").stat().st_size > 0
     assert out["corr_smart"] == pytest.approx(
         np.corrcoef((sig[..., 1] * sig[..., 3]).ravel(), lam.ravel())[0, 1])
     ku_inf = mechanism.fig_ku_inf(stats, tmp_path / "b.png")
     assert ku_inf["snn"]["n"] == lam.size and ku_inf["b"].shape == (30, 30)
-    pattern = mechanism.fig_ku_pattern({0.1: stats, 10.0: mechanism.decision_stats(sig, -lam)},
+    pattern = mechanism.fig_ku_pattern({0.1: stats, 10.0: decision_stats.decision_stats(sig, -lam)},
                                        tmp_path / "c.png")
     top = pattern[(0.1, "n_theta")]
     assert np.nanmean(top[-5:, -5:]) > 0.5 and np.nanmean(top[:5, -5:]) < -0.5  # S_np x n_theta
@@ -123,7 +133,7 @@ def test_ku_record_is_cached_and_consistent(compose_cfg, tmp_path):
         ["figures.n_flows=2", "figures.n_swimmers=3", "figures.n_traj=2", "progress=false",
          "episode.duration=1.0", "flow.n_grid=64", "flow.spacing=0.1"], name="figures")),
         out=tmp_path / "fig", cache=tmp_path / "cache")
-    a = records.ku_record(cfg, 10.0)
+    a = evaluations.ku_record(cfg, 10.0)
     assert a["final"].shape == (3, 6, 2) and a["traj"].shape == (3, 2, 11, 2)
     assert a["sto_signals"].shape == (4, 10, 5) and a["sto_Lambda"].shape == (4, 10)
     assert np.allclose(a["per_flow"], a["R_hat"].reshape(3, 2, 3).mean(-1))
@@ -131,7 +141,7 @@ def test_ku_record_is_cached_and_consistent(compose_cfg, tmp_path):
     ref = 0.707 * 1.0 * 0.5  # v_s T in flow units (tau_K = 0.5 l_f / u_rms)
     assert np.linalg.norm(a["final"], axis=-1) / ref == pytest.approx(a["R_hat"], rel=1e-3)
     assert len(list((tmp_path / "cache").glob("ku_ku10-*.npz"))) == 1
-    b = records.ku_record(cfg, 10.0)
+    b = evaluations.ku_record(cfg, 10.0)
     assert all(np.array_equal(a[k], b[k]) for k in a)
     assert math.isclose(float(a["time"][-1]), 1.0)
 
@@ -159,7 +169,7 @@ def test_videos_on_a_tiny_record(tmp_path):
 
 
 def test_frame_lambda_holds_the_shape_from_each_frame_on():
-    from swimrl.paper.records import FRAME_EVERY, frame_lambda
+    from swimrl.paper.evaluations import FRAME_EVERY, frame_lambda
 
     n = 2 * FRAME_EVERY
     lam = np.arange(n, dtype=float).reshape(1, 1, 1, n) * np.ones((2, 3, 4, 1))
@@ -182,7 +192,7 @@ def test_minimal_model_figure_reads_fits_and_draws_both_panels(tmp_path):
     assert list(fits) == [0.1, 1e7]
     name = ablation.minimal_name(fits[1e7])
     assert name == "minimal(0.4,0.2,0.1,-0.05)"
-    spec = records.actor(name, None)
+    spec = evaluations.actor(name, None)
     assert spec.name == "minimal" and spec.coeffs == (0.4, 0.2, 0.1, -0.05)
     kus = np.array(list(fits))
     r = {"smart": np.array([0.9, 0.7]), "minimal": np.array([0.88, 0.6]),
@@ -291,9 +301,9 @@ def test_find_curves_follows_linked_run_directories(tmp_path):
 
 
 def test_builders_are_the_configured_figures():
-    """``only=`` is checked against :data:`records.FIGURES` (without importing the builders):
+    """``only=`` is checked against :data:`settings.FIGURES` (without importing the builders):
     the same names, in build order, as :data:`BUILDERS`."""
-    assert tuple(BUILDERS) == records.FIGURES
+    assert tuple(BUILDERS) == settings.FIGURES
 
 
 def _held_out_comparison(path, runs, signals, sto=0.5, seed=0, n_flows=2, n_swimmers=4,
@@ -358,19 +368,19 @@ def test_sign_agreement_with_sto_counts_every_decision():
     lam = -0.9 * np.sign(x)
     flip = RNG.random(lam.shape) < 0.2
     lam[flip] *= -1
-    st = mechanism.DecisionStats()
+    st = decision_stats.DecisionStats()
     for i in range(sig.shape[1]):
         st.add(sig[:, i], lam[:, i])
     a = st.arrays()
-    got = mechanism.sign_agreement(a)
+    got = decision_stats.sign_agreement(a)
     ok = x != 0
     assert got["undetermined"] == 200 and got["n"] == lam.size
     assert got["agree"] == int((~flip & ok).sum()) and got["disagree"] == int((flip & ok).sum())
     assert got["fraction"] == pytest.approx((~flip & ok).sum() / ok.sum())
-    assert mechanism.sign_agreement(mechanism.decision_stats(sig, lam)) == got
+    assert decision_stats.sign_agreement(decision_stats.decision_stats(sig, lam)) == got
     old = {k: v for k, v in a.items() if k != "sign_STO"}  # arrays cached before the counts
-    assert mechanism.sign_agreement(old) is None
-    sto = mechanism.sign_agreement(mechanism.decision_stats(sig, -0.98 * np.sign(x)))
+    assert decision_stats.sign_agreement(old) is None
+    sto = decision_stats.sign_agreement(decision_stats.decision_stats(sig, -0.98 * np.sign(x)))
     assert sto["fraction"] == 1.0 and sto["disagree"] == 0
 
 
@@ -390,7 +400,7 @@ def test_occupancy_weight_follows_the_stated_rule(tmp_path):
     assert rule["full_colour_share"] == pytest.approx(1 / 900)
     assert rule["white_share"] == pytest.approx(1 / 90000) and rule["min_count"] == 5
     sig, lam = _record(300, 40)
-    stats = mechanism.decision_stats(sig, lam)
+    stats = decision_stats.decision_stats(sig, lam)
     out = mechanism.fig_ku_inf(stats, tmp_path / "b.png", sample="(a test sample)")
     assert out["a"] == {"drawn": 8000, "sample": lam.size}
     for panel in "bc":
@@ -406,13 +416,13 @@ def test_extend_record_adds_fields_and_changes_none(tmp_path):
     cfg = replace(figures_config(_compose(["progress=false"])), records=tmp_path)
     rec = {"figure": "kuInf", "sizes": {}, "evaluations": {}, "derived": {"a": 1, "b": [1, 2]}}
     (tmp_path / "kuInf.json").write_text(json.dumps(rec))
-    same = mechanism.extend_record(cfg, rec, lambda r: None)
+    same = records.extend_record(cfg, rec, lambda r: None)
     assert same is rec and json.loads((tmp_path / "kuInf.json").read_text()) == rec
-    new = mechanism.extend_record(cfg, rec, lambda r: r["derived"].update(c={"x": 0.5}))
+    new = records.extend_record(cfg, rec, lambda r: r["derived"].update(c={"x": 0.5}))
     assert new["derived"] == {"a": 1, "b": [1, 2], "c": {"x": 0.5}}
     assert json.loads((tmp_path / "kuInf.json").read_text()) == new
     with pytest.raises(AssertionError, match="derived.a"):
-        mechanism.extend_record(cfg, new, lambda r: r["derived"].update(a=2))
+        records.extend_record(cfg, new, lambda r: r["derived"].update(a=2))
     assert json.loads((tmp_path / "kuInf.json").read_text()) == new
 
 

@@ -10,9 +10,9 @@ import torch
 
 from swimrl.env import EnvParams, SwimmerEnv
 from swimrl.errors import ConfigError
-from swimrl.flows.build import StochasticSpec, build_flow
+from swimrl.flows.build import build_flow
 from swimrl.flows.grid import PeriodicGrid
-from swimrl.flows.stochastic import TAU_K, StochasticFlow, gaussian_spectrum
+from swimrl.flows.stochastic import TAU_K, StochasticFlow, StochasticSpec, gaussian_spectrum
 
 
 def small(n_flows=3, kubo=1e7, seed=0, dtype=torch.float64, **options) -> StochasticFlow:

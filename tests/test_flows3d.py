@@ -13,7 +13,7 @@ from omegaconf import OmegaConf
 from swimrl.errors import ConfigError
 from swimrl.flows.analytic import ABCFlow, LinearFlow, TaylorGreenFlow, check_gradient
 from swimrl.flows.base import gradient_norm2
-from swimrl.flows.pointwise import channels_2d, vorticity
+from swimrl.flows.pointwise import vorticity
 from swimrl.flows.stochastic3d import (
     TAU_K,
     StochasticFlow3D,
@@ -22,6 +22,7 @@ from swimrl.flows.stochastic3d import (
     mode_sum,
     velocity_covariance,
 )
+from swimrl.physics.body2d import channels_2d
 
 F64 = torch.float64
 

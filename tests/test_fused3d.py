@@ -16,9 +16,9 @@ from swimrl.env import EnvParams, PointSwimmerEnv
 from swimrl.errors import ConfigError
 from swimrl.flows.analytic import ABCFlow
 from swimrl.flows.stochastic3d import StochasticFlow3D, mode_sum
+from swimrl.physics.body3d import SIGNAL_NAMES_3D
 from swimrl.physics.integrator import integrate_interval_3d_fused
 from swimrl.physics.kernels import load_cpu_kernel_3d
-from swimrl.physics.signals3d import SIGNAL_NAMES_3D
 from swimrl.physics.swimmer3d import channels_from_gradient, heun_step_3d
 
 #: Float32 round-off of one interval: positions of size ~30 (ulp 2e-6) and unit vectors.
@@ -160,7 +160,7 @@ def test_sto_episode_r_hat_agrees_within_sem():
     for kernel in ("fused", "eager"):
         env = make_env(kernel, torch.float32, 10.0, n_flows=4, n_swimmers=50, seed=2,
                        duration=5.0)
-        actor = build_strategy(StrategySpec("sto"), env.action_spec_unbatched, env.dim)
+        actor = build_strategy(StrategySpec("sto"), env.action_spec_unbatched)
         td = env.rollout(env.params.n_decisions, actor)
         r_hat[kernel] = env.score(td[..., -1]["next"]).flatten()
         env.check_displacement()

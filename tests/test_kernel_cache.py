@@ -11,6 +11,8 @@ import sys
 import time
 from pathlib import Path
 
+import pytest
+
 from swimrl.physics.kernels import SOURCE, extension_name, remove_stale_lock
 
 #: A stand-in for the kernel source: as quick to compile as a C++ extension can be.
@@ -38,6 +40,7 @@ def test_name_follows_the_source_content_not_its_path(tmp_path):
     assert extension_name(SOURCE).startswith("swimrl_heun_cpu_")
 
 
+@pytest.mark.slow  # two C++ extension builds in subprocesses (~20-35 s)
 def test_two_source_trees_do_not_rebuild_each_other(tmp_path, monkeypatch):
     """Also: torch's build waits while ``<build dir>/lock`` exists, and a process killed
     during it leaves the file behind. An old lock before a build is removed (with a warning);

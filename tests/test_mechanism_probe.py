@@ -17,8 +17,8 @@ import torch
 from swimrl.analysis.gaussian_states import gaussian_states
 from swimrl.analysis.mechanism_probe import actions, mechanism_stats, sto_shape
 from swimrl.env import EnvParams
-from swimrl.physics.signals import SIGNAL_NAMES, compute_signals
-from swimrl.physics.signals3d import SIGNAL_NAMES_3D, compute_signals_3d
+from swimrl.physics.body2d import SIGNAL_NAMES, compute_signals
+from swimrl.physics.body3d import SIGNAL_NAMES_3D, compute_signals_3d
 from swimrl.physics.swimmer import swimmer_rhs
 from swimrl.physics.swimmer3d import strain_tensor, swimmer_rhs_3d
 from swimrl.physics.tumbling import stabilising_shape as _stabilising_shape
@@ -72,7 +72,7 @@ def test_stabilising_shape_is_the_brute_force_minimum_of_the_tumbling_rate(dim):
     step = float(grid[1] - grid[0])
     assert (star - grid[scan.argmin(dim=0)]).abs().max() <= step + 1e-12
     # STO's rule is at the bounds; its rate is never below Lambda*'s
-    assert (physical_rate(g, sto_shape(g.signals, dim, LAM_MAX)) >= at_star - 1e-12).all()
+    assert (physical_rate(g, sto_shape(g.signals, LAM_MAX)) >= at_star - 1e-12).all()
 
 
 def test_planar_3d_stabilising_shape_equals_the_2d_one():
@@ -94,7 +94,7 @@ def test_planar_3d_stabilising_shape_equals_the_2d_one():
                               stabilising_shape(sig3, 3, lam_max), rtol=1e-9, atol=1e-12)
     lam = torch.rand(n, generator=gen, dtype=f64) * 2 - 1
     assert torch.allclose(tumbling_rate(sig2, lam, 2), tumbling_rate(sig3, lam, 3), atol=1e-12)
-    assert torch.equal(sto_shape(sig2, 2, LAM_MAX), sto_shape(sig3, 3, LAM_MAX))
+    assert torch.equal(sto_shape(sig2, LAM_MAX), sto_shape(sig3, LAM_MAX))
 
 
 def test_gaussian_samples_have_the_stated_moments():
@@ -133,16 +133,16 @@ def test_gaussian_samples_have_the_stated_moments():
 def test_sto_against_itself_correlates_fully(dim):
     g = gaussian_states(dim, 20_000, seed=4)
     params = EnvParams(signals=SIGNAL_NAMES_3D if dim == 3 else SIGNAL_NAMES)
-    sto = build_strategy(StrategySpec("sto"), action_spec(LAM_MAX), dim)
-    lam = actions(sto, g.signals, params, dim)
-    rec = mechanism_stats(g.signals, lam, dim, LAM_MAX, 0.8)
+    sto = build_strategy(StrategySpec("sto"), action_spec(LAM_MAX))
+    lam = actions(sto, g.signals, params)
+    rec = mechanism_stats(g.signals, lam, LAM_MAX, 0.8)
     assert rec["corr_sto"] == pytest.approx(1.0, abs=1e-12)
     t = rec["tumbling"]
     assert t["subject"]["mean"] == t["sto"]["mean"]
     assert t["star"]["mean"] < t["zero"]["mean"] < t["sto"]["mean"]
     assert rec["n_aligned"] == int((g.signals[:, 0] > 0.8).sum())
-    naive = build_strategy(StrategySpec("naive", shape_factor=0.98), action_spec(LAM_MAX), dim)
-    rec = mechanism_stats(g.signals, actions(naive, g.signals, params, dim), dim, LAM_MAX, 0.8)
+    naive = build_strategy(StrategySpec("naive", shape_factor=0.98), action_spec(LAM_MAX))
+    rec = mechanism_stats(g.signals, actions(naive, g.signals, params), LAM_MAX, 0.8)
     assert rec["corr_sto"] is None and rec["corr_star"] is None  # a constant has none
 
 

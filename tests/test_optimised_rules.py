@@ -14,12 +14,11 @@ from hydra import compose, initialize_config_module
 from swimrl.config import compare_config, eval_config
 from swimrl.errors import ConfigError
 from swimrl.evaluation.rollout import evaluate
-from swimrl.physics.signals import SIGNAL_NAMES, compute_signals
-from swimrl.physics.signals3d import SIGNAL_NAMES_3D, compute_signals_3d
+from swimrl.physics.body2d import SIGNAL_NAMES, compute_signals
+from swimrl.physics.body3d import SIGNAL_NAMES_3D, compute_signals_3d
 from swimrl.physics.swimmer import strain_np
 from swimrl.physics.swimmer3d import swimmer_rhs_3d
 from swimrl.policies.baselines import ShortTimeOptimal, StrategySpec, minimal_model
-from swimrl.policies.baselines3d import ShortTimeOptimal3D
 from swimrl.policies.optimised import (
     PRESETS,
     RULE_COEFFS,
@@ -157,7 +156,7 @@ def test_the_sto_limit_is_sto():
         assert torch.equal(optimised_rule(s2, c, LAM, SIGNAL_NAMES),
                            ShortTimeOptimal(LAM)(s2).squeeze(-1))
         assert torch.equal(optimised_rule(s3, c, LAM, SIGNAL_NAMES_3D),
-                           ShortTimeOptimal3D(LAM)(s3).squeeze(-1))
+                           ShortTimeOptimal(LAM)(s3).squeeze(-1))
     assert not optimised_rule(s2, (INF, 0, 0, 0, 0, 0), LAM, SIGNAL_NAMES).isnan().any()
 
 

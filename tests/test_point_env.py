@@ -16,14 +16,15 @@ import torch
 from omegaconf import OmegaConf
 
 from swimrl.config import eval_config, flow_spec
-from swimrl.env import EnvParams, PointSwimmerEnv, SwimmerEnv
+from swimrl.env import EnvParams, PointSwimmerEnv, build_env
 from swimrl.errors import ConfigError
 from swimrl.flows.analytic import LinearFlow, LinearSpec
-from swimrl.flows.build import StochasticSpec, build_flow
-from swimrl.flows.registry import FlowEntry, flow_dimension, flow_entry, flow_names, register_flow
+from swimrl.flows.build import build_flow
+from swimrl.flows.entry import FlowEntry
+from swimrl.flows.registry import flow_dimension, flow_entry, flow_names, register_flow
+from swimrl.flows.stochastic import StochasticSpec
 from swimrl.flows.stochastic3d import Stochastic3DSpec
-from swimrl.physics.signals3d import SIGNAL_NAMES_3D
-from swimrl.policies.baselines3d import short_time_optimal_3d
+from swimrl.physics.body3d import SIGNAL_NAMES_3D
 from swimrl.runtime import Runtime
 
 CPU = Runtime.from_names("cpu", "float64", 1)
@@ -66,7 +67,7 @@ def test_a_new_flow_is_one_registration(monkeypatch):
     register_flow(FlowEntry("uniform_test", UniformSpec, build, 3))
     spec = flow_spec(OmegaConf.create({"name": "uniform_test", "speed": 0.5}), CPU)
     assert spec == UniformSpec(0.5)
-    env = SwimmerEnv.build(spec, EnvParams(**SHORT, signals=SIGNAL_NAMES_3D), CPU, 2, 3, seed=0)
+    env = build_env(spec, EnvParams(**SHORT, signals=SIGNAL_NAMES_3D), CPU, 2, 3, seed=0)
     assert isinstance(env, PointSwimmerEnv) and env.dim == 3
     assert env.rollout(4, break_when_any_done=False)["next", "reward"].shape == (2, 3, 4, 1)
 
@@ -77,9 +78,9 @@ def test_the_3d_env_in_a_plane_is_the_2d_env():
     are the 2D ones as signals3d's docstring states."""
     a2 = ((0.3, 1.1), (-0.4, -0.3))
     a3 = ((0.3, 1.1, 0.0), (-0.4, -0.3, 0.0), (0.0, 0.0, 0.0))
-    env2 = SwimmerEnv.build(LinearSpec(a2), EnvParams(**SHORT), CPU, 1, 6, seed=1)
-    env3 = SwimmerEnv.build(LinearSpec(a3), EnvParams(**SHORT, signals=SIGNAL_NAMES_3D), CPU,
-                            1, 6, seed=1)
+    env2 = build_env(LinearSpec(a2), EnvParams(**SHORT), CPU, 1, 6, seed=1)
+    env3 = build_env(LinearSpec(a3), EnvParams(**SHORT, signals=SIGNAL_NAMES_3D), CPU,
+                     1, 6, seed=1)
     env2.reset()
     env3.reset()
     theta = torch.linspace(0.1, 6.0, 6, dtype=torch.float64).view(1, 6)
@@ -115,7 +116,7 @@ def test_pure_rotation_turns_the_orientation_at_half_the_vorticity():
     w = 1.0
     spec = LinearSpec(((0.0, -w, 0.0), (w, 0.0, 0.0), (0.0, 0.0, 0.0)))
     params = EnvParams(**SHORT, swim_speed=1e-9, signals=SIGNAL_NAMES_3D)
-    env = SwimmerEnv.build(spec, params, CPU, 1, 5, seed=2)
+    env = build_env(spec, params, CPU, 1, 5, seed=2)
     td = env.reset()
     n0 = env.orientation.clone()
     for _ in range(4):
@@ -132,12 +133,12 @@ def test_3d_stochastic_env_signals_sto_and_bound():
     from swimrl.policies.baselines import StrategySpec, build_strategy
 
     params = EnvParams(**SHORT, signals=SIGNAL_NAMES_3D)
-    env = SwimmerEnv.build(Stochastic3DSpec(kubo=1.0), params, CPU, 3, 8, seed=4)
-    actor = build_strategy(StrategySpec("sto"), env.action_spec_unbatched, env.dim)
+    env = build_env(Stochastic3DSpec(kubo=1.0), params, CPU, 3, 8, seed=4)
+    actor = build_strategy(StrategySpec("sto"), env.action_spec_unbatched)
     td = env.rollout(params.n_decisions, actor)
     assert td["signals"].shape == (3, 8, 4, 7)
-    torch.testing.assert_close(td["action"][..., 0],
-                               short_time_optimal_3d(td["signals"], 0.98))
+    s_np1 = td["signals"][..., SIGNAL_NAMES_3D.index("S_np1")]
+    torch.testing.assert_close(td["action"][..., 0], 0.98 * torch.sign(s_np1))
     assert bool((env.max_flow_speed > 0).all())
     env.check_displacement()
     env.pos[0, 0] += 1e3
@@ -152,7 +153,7 @@ def test_3d_target_task_freezes_arrived_swimmers():
 
     params = EnvParams(**SHORT, signals=SIGNAL_NAMES_3D,
                        task=TaskSpec("target", distance=0.05, arrival_radius=0.04))
-    env = SwimmerEnv.build(Stochastic3DSpec(kubo=1.0), params, CPU, 2, 16, seed=5)
+    env = build_env(Stochastic3DSpec(kubo=1.0), params, CPU, 2, 16, seed=5)
     td = env.reset()
     torch.testing.assert_close(env.target.norm(dim=-1), torch.full((2, 16), 0.05,
                                                                    dtype=torch.float64))
@@ -248,9 +249,8 @@ def test_sto_amplitude_family():
     torch.testing.assert_close(ShortTimeOptimal(0.98, (0.5, 0.5))(sig), sto * (0.5 / 0.98))
     asym = ShortTimeOptimal(0.98, (0.9, 0.2))(sig)
     torch.testing.assert_close(asym, torch.where(sto > 0, 0.9, -0.2))
-    from swimrl.policies.baselines3d import ShortTimeOptimal3D
     sig3 = torch.randn(1000, 7, generator=torch.Generator().manual_seed(1))
-    lam3 = ShortTimeOptimal3D(0.98, (0.9, 0.2))(sig3)[..., 0]
+    lam3 = ShortTimeOptimal(0.98, (0.9, 0.2))(sig3)[..., 0]
     torch.testing.assert_close(lam3, torch.where(sig3[:, 2] > 0, 0.9, -0.2))
     variants = strategy_variants(["sto"], sto_amplitudes=[[0.98, 0.98], [0.9, 0.2]])
     assert [v.label for v in variants] == ["sto(+0.98,-0.98)", "sto(+0.90,-0.20)"]

@@ -123,6 +123,7 @@ BIG_EVAL = [*TINY, "train.eval_every=2", "train.eval_flows=2", "train.eval_swimm
             "eval.flows_per_batch=2"]
 
 
+@pytest.mark.slow  # a real SIGTERM in a 2 x 100 000-swimmer evaluation, then resume (~40 s)
 def test_sigterm_inside_a_periodic_evaluation_checkpoints_at_once_and_resume_makes_it(
         compose_cfg, tmp_path):
     """A signal that arrives during an evaluation is answered before the evaluation's next
@@ -146,6 +147,7 @@ def test_sigterm_inside_a_periodic_evaluation_checkpoints_at_once_and_resume_mak
     assert evals == ["0", "160", "320"], curve
 
 
+@pytest.mark.slow  # a real SIGUSR1 to a swimrl-compare process, then its resume (~13 s)
 def test_sigusr1_stops_a_comparison_inside_the_chunk_in_flight(compose_cfg, tmp_path):
     out = tmp_path / "run"
     proc, log = _start(COMPARE, [*COMPARISON, f"hydra.run.dir={out}"], tmp_path)

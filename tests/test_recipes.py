@@ -106,6 +106,7 @@ def test_the_page_shows_the_recipe_files_as_they_are():
                                "A new flow end to end"}
 
 
+@pytest.mark.slow  # the recipe's commands end to end: train, compare, a script (~22 s)
 def test_own_signal_set_and_computed_signal(workdir):
     train, python = commands("Train on your own signal set")
     tiny = {"swimrl-train": EVAL_TINY + TRAIN_TINY, "swimrl-compare": EVAL_TINY,
@@ -130,6 +131,7 @@ def test_own_signal_set_and_computed_signal(workdir):
     assert record["sto"] == pytest.approx(trained["sto"]["per_flow"], rel=1e-6)
 
 
+@pytest.mark.slow  # the recipe's sweep run locally end to end (~24 s)
 def test_slurm_sweep_runs_locally_and_its_launcher_keys_reach_sbatch(workdir, tmp_path_factory):
     check, sweep = commands("A sweep on Slurm")
     printed = run(shrink(check, {"swimrl-train": []}), workdir)
@@ -190,6 +192,7 @@ def sbatch_lines(launcher: dict, folder: Path) -> set[str]:
             if line.startswith("#SBATCH ")}
 
 
+@pytest.mark.slow  # the recipe's new flow: train and compare end to end (~22 s)
 def test_new_flow_end_to_end(workdir):
     (block,) = commands("A new flow end to end")
     tiny = {"oscillating_cells.py": [], "swimrl-compare": POINT_TINY,

@@ -8,6 +8,8 @@ import subprocess
 import sys
 from pathlib import Path
 
+import pytest
+
 ROOT = Path(__file__).resolve().parent.parent
 
 
@@ -61,6 +63,7 @@ def test_optimal_escape_script_runs_at_a_tiny_size(tmp_path):
     assert (tmp_path / "oe.png").stat().st_size > 0
 
 
+@pytest.mark.slow  # summarises the committed DNS-transfer records (~15 s)
 def test_dns_transfer_summary_is_what_the_records_give():
     """three_seeds/dns_transfer/summarise.py on the committed records reproduces the committed
     summary.json and table.md (the numbers quoted in three_seeds/README.md)."""

@@ -102,7 +102,7 @@ def test_live_dns_flow_matches_its_solver(compose_cfg):
     """flow=dns: a small live DNS; grid fields equal the solver's channels at snapshot times
     and the swimmer units are the measured u_rms and tau_K."""
     from swimrl.config import eval_setup
-    from swimrl.env import SwimmerEnv as Env
+    from swimrl.env import build_env
     from swimrl.flows.dns import flow_channels
 
     cfg = compose_cfg(
@@ -119,7 +119,7 @@ def test_live_dns_flow_matches_its_solver(compose_cfg):
         ]
     )
     setup = eval_setup(cfg)
-    env = Env.build(setup.flow, setup.params, setup.runtime, 2, 4, 0)
+    env = build_env(setup.flow, setup.params, setup.runtime, 2, 4, 0)
     flow, run = env.flow, env.flow.source
     assert env.tau_k == pytest.approx(run.tau_k) and env.swim_speed == pytest.approx(
         0.707 * run.u_rms

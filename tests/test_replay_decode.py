@@ -10,10 +10,10 @@ import pytest
 import torch
 
 from swimrl.flows.dns.grid import SpectralGrid, dealias_cutoff
+from swimrl.flows.dns.sources import DNSStore, StoreSet
 from swimrl.flows.dns.state import channels_hat, flow_channels, random_state
 from swimrl.flows.dns.store import DNSStoreWriter
 from swimrl.flows.replay import ReplayFlow
-from swimrl.flows.sources import DNSStore, StoreSet
 
 N = 64  # stored grid: K = 21 retained modes per axis
 

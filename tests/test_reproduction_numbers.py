@@ -947,7 +947,7 @@ ROWS: dict[int, Spec] = {
         C("40 frozen flows × 1000 swimmers, 8e7 decisions", _ku_inf_sizes)),
         unrecorded={"8000 decisions": "the plotting code (swimrl/paper/mechanism.py)",
                     "every 20th decision of 20 swimmers per flow":
-                        "the recorder's sampling (swimrl/paper/mechanism.py)"}),
+                        "the recorder's sampling (swimrl/paper/decision_stats.py)"}),
     22: Spec("json", (C("0.91-0.97", lambda: span(_map_corr("ku1e7"), 2)),)),
     23: Spec("json"),
     24: Spec("json", (

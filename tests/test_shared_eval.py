@@ -8,7 +8,7 @@ import pytest
 import torch
 
 from swimrl.config import compare_config, eval_config, eval_setup
-from swimrl.env import SwimmerEnv
+from swimrl.env import build_env
 from swimrl.evaluation.compare import compare
 from swimrl.evaluation.rollout import evaluate, evaluate_shared
 from swimrl.policies.baselines import StrategySpec
@@ -56,7 +56,7 @@ def test_blocks_start_from_the_same_initial_conditions(compose_cfg):
         alone = eval_config(compose_cfg(SMALL + SIZE + over))
         plain = evaluate(alone.setup, alone.strategy, over[0])["per_flow"]
         assert shared[block]["per_flow"] == pytest.approx(plain, rel=1e-6, abs=0)
-    env = SwimmerEnv.build(c.setup.flow, c.setup.params, c.setup.runtime, 2, 6, 0, ic_blocks=3)
+    env = build_env(c.setup.flow, c.setup.params, c.setup.runtime, 2, 6, 0, ic_blocks=3)
     env.reset()
     start = torch.cat([env.start_pos, env.theta.unsqueeze(-1)], dim=-1).view(2, 3, 2, 3)
     assert torch.equal(start[:, 1], start[:, 0]) and torch.equal(start[:, 2], start[:, 0])

@@ -8,7 +8,7 @@ import pytest
 import torch
 
 from swimrl.flows.interpolation import bilinear_periodic
-from swimrl.physics.signals import compute_signals
+from swimrl.physics.body2d import compute_signals
 from swimrl.physics.swimmer import heun_step, swimmer_rhs
 from swimrl.policies.baselines import ShortTimeOptimal
 

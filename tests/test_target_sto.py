@@ -31,7 +31,7 @@ from dataclasses import dataclass
 import pytest
 import torch
 
-from swimrl.physics.signals import compute_signals
+from swimrl.physics.body2d import compute_signals
 from swimrl.physics.swimmer import swimmer_rhs
 from swimrl.policies.baselines import N_THETA, S_NP, ShortTimeOptimal
 

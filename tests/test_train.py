@@ -125,12 +125,12 @@ def test_ppo_end_to_end(train_cfg, tmp_path, anneal):
 
 
 def test_validation_precedes_compute(train_cfg, tmp_path, monkeypatch):
-    import swimrl.env
+    import swimrl.env.build
 
     def boom(*a, **k):
         raise AssertionError("flow built before validation")
 
-    monkeypatch.setattr(swimrl.env, "build_flow", boom)
+    monkeypatch.setattr(swimrl.env.build, "build_flow", boom)
     with pytest.raises(ValueError, match="train.rollout_length"):
         train(train_cfg("train.rollout_length=0"), tmp_path)
     assert not (tmp_path / "tb").exists()
@@ -335,6 +335,7 @@ def _cli(args, cwd, timeout=240):
     return subprocess.run(cmd, capture_output=True, text=True, cwd=cwd, timeout=timeout)
 
 
+@pytest.mark.slow  # a two-job Hydra sweep with the joblib launcher, in subprocesses (~35 s)
 def test_cli_multirun_joblib(tmp_path):
     sweep = tmp_path / "sweep"
     out = _cli(
@@ -364,6 +365,7 @@ def test_cli_multirun_joblib(tmp_path):
     assert (tmp_path / "t.csv").read_text().startswith("run,seed,strategy,R_hat_mean")
 
 
+@pytest.mark.slow  # a two-job Hydra sweep with the submitit_local launcher (~30 s)
 def test_cli_multirun_submitit_local(tmp_path):
     sweep = tmp_path / "sweep"
     out = _cli(
@@ -440,6 +442,7 @@ def test_long_floor_preset_is_long_with_a_sigma_bound():
     assert floor05 == long
 
 
+@pytest.mark.slow  # two DNS runs, then PPO on one, evaluated on the other (~11-17 s)
 def test_training_in_a_stored_dns_run(compose_cfg, tmp_path):
     """``swimrl-train flow=dns_replay``: PPO on a (tiny) stored DNS run, swimmers in its units,
     flows sharing starts; evaluated on another run that training never saw (``eval_flow``)."""
@@ -447,7 +450,7 @@ def test_training_in_a_stored_dns_run(compose_cfg, tmp_path):
 
     from swimrl.config import dns_run
     from swimrl.flows.dns.run import run_dns
-    from swimrl.flows.sources import DNSStore
+    from swimrl.flows.dns.sources import DNSStore
 
     stores = {seed: tmp_path / f"run{seed}.zarr" for seed in (0, 1)}
     for seed, store in stores.items():
@@ -520,7 +523,8 @@ def _loss_and_grads(trainer: PPOTrainer, fn, batch):
     return out, grads
 
 
-@pytest.mark.parametrize("entropy_coeff", [0.0, 0.005])
+@pytest.mark.parametrize(
+    "entropy_coeff", [0.0, pytest.param(0.005, marks=pytest.mark.slow)])  # 0.005: ~20 s
 def test_compiled_update_matches_eager(train_cfg, tmp_path, entropy_coeff):
     """``train.compile=true`` (torch.compile of loss + backward) gives the eager loss terms
     and gradients on a fixed minibatch, to float32 round-off."""
@@ -706,6 +710,7 @@ def test_parallel_layout_env_specs(compose_cfg):
     check_env_specs(env)
 
 
+@pytest.mark.slow  # two compiled updates at the parallel layout's own sizes (~28 s)
 def test_parallel_layout_two_updates_then_resume(compose_cfg, tmp_path):
     """Smoke run of the layout on the CPU (its sizes, compiled loss): one update, stopped;
     ``resume=true`` continues it with the second update of the same layout and finishes."""
@@ -756,3 +761,22 @@ def test_a_policy_that_senses_its_shape_trains_and_evaluates(train_cfg, tmp_path
                                          "eval.n_swimmers=4", "signals=all_shape"]))
     m = evaluate(c.setup, actor_for(c.strategy, c.policy, c.setup.params), "policy")
     assert m["shape_change_mean"] >= 0 and math.isfinite(m["R_hat_mean"])
+
+
+def test_a_3d_policy_trains_and_evaluates_on_the_invariant_signals(compose_cfg, tmp_path):
+    """``signals=all_invariant`` in 3D: the seven signals and the derived lever and torque are
+    observed in training, saved with the policy and read back by its evaluation."""
+    over = ["flow=stochastic3d", "flow.kubo=10", "signals=all_invariant"]
+    tiny = [o for o in TINY if not o.startswith("flow.")]
+    cfg = compose_cfg(tiny + over, name="train")
+    metrics = train(cfg, tmp_path)
+    assert math.isfinite(metrics["R_hat_mean"])
+    policy = torch.load(tmp_path / "policy.pt", map_location="cpu", weights_only=False)
+    assert policy["signals"] == ["n_r", "S_nn", "S_np1", "S_np2", "omega_n", "omega_p1",
+                                 "omega_p2", "lever", "torque"]
+    assert policy["model"]["n_obs"] == 9
+    ev = eval_config(compose_cfg([*over, "strategy=policy", f"policy={tmp_path}",
+                                  "episode.duration=2.0", "eval.n_flows=2",
+                                  "eval.n_swimmers=4", "eval.progress=false", "threads=1"]))
+    out = evaluate(ev.setup, actor_for(ev.strategy, ev.policy, ev.setup.params), "policy")
+    assert math.isfinite(out["R_hat_mean"])

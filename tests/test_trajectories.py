@@ -65,7 +65,7 @@ def test_record_bound(compose_cfg):
 def test_record_vorticity_frames(compose_cfg):
     """field_every=m: omega tau_K of the first flow at decisions 0, m, ... and at T; the first
     frame is the evaluation's initial flow."""
-    from swimrl.paper.records import flow_vorticity
+    from swimrl.paper.evaluations import flow_vorticity
 
     c = eval_config(compose_cfg(SMALL + SIZE))
     rec = TrajectoryRecorder(1, field_every=4, field_stride=2)

@@ -30,8 +30,9 @@ import torch
 from hydra.experimental.callback import Callback
 
 from swimrl.errors import as_float, one_of
+from swimrl.flows.entry import POINT_KERNELS, FlowEntry
 from swimrl.flows.pointwise import PointFlow
-from swimrl.flows.registry import POINT_KERNELS, FlowEntry, register_flow
+from swimrl.flows.registry import register_flow
 
 
 class OscillatingCells(PointFlow):

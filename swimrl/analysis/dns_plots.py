@@ -39,7 +39,7 @@ import torch
 from swimrl.flows.dns import diagnostics as dg
 from swimrl.flows.dns.grid import SpectralGrid
 from swimrl.flows.dns.params import DNSParams
-from swimrl.flows.sources import DNSStore
+from swimrl.flows.dns.sources import DNSStore
 from swimrl.runs.atomic import atomic_write_text
 
 from .plots import pyplot

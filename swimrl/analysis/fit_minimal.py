@@ -27,7 +27,7 @@ import numpy as np
 import torch
 from scipy.optimize import curve_fit
 
-from swimrl.env import SwimmerEnv
+from swimrl.env import build_env
 from swimrl.errors import ConfigError, as_int, keep_number_types
 from swimrl.evaluation.rollout import EvalConfig, actor_for, chunk_seed, run_episodes
 from swimrl.flows.labels import ku_number
@@ -106,8 +106,8 @@ def run_fit(cfg: FitConfig) -> dict:
     setup.runtime.apply()
     actor = actor_for(ev.strategy, ev.policy, setup.params)
     sizes = setup.sizes
-    env = SwimmerEnv.build(setup.flow, setup.params, setup.runtime, sizes.n_flows,
-                           sizes.n_swimmers, chunk_seed(setup.seed, 0))
+    env = build_env(setup.flow, setup.params, setup.runtime, sizes.n_flows,
+                    sizes.n_swimmers, chunk_seed(setup.seed, 0))
     if not isinstance(actor, torch.nn.Module):
         actor = build_strategy(actor, env.action_spec_unbatched)
     signals, actions, flows = sample_strategy(env, actor.to(setup.runtime.device),

@@ -10,13 +10,11 @@ vorticity components of variance 1/3; $\tau_K = 1$."""
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass
 
 import torch
 
-from swimrl.physics.signals import compute_signals
-from swimrl.physics.signals3d import compute_signals_3d
+from swimrl.physics.body import body
 
 
 @dataclass(frozen=True)
@@ -37,32 +35,10 @@ class GaussianStates:
 def gaussian_states(dim: int, n: int, seed: int) -> GaussianStates:
     """``n`` isotropic Gaussian states of dimension ``dim`` (module docstring), drawn from
     ``torch.Generator().manual_seed(seed)``; the signals are those of
-    :func:`~swimrl.physics.signals.compute_signals` /
-    :func:`~swimrl.physics.signals3d.compute_signals_3d` with ``x - x_0`` along ``e_r``."""
+    :meth:`~swimrl.physics.body.Body.signals` with ``x - x_0`` along ``e_r``
+    (:meth:`~swimrl.physics.body.Body.isotropic_state` draws them)."""
     g = torch.Generator().manual_seed(int(seed))
-    f64 = torch.float64
-
-    def normal(*shape):
-        return torch.randn(*shape, generator=g, dtype=f64)
-
-    if dim == 3:
-        v = normal(n, 3)
-        orient = v / v.norm(dim=-1, keepdim=True)
-        a = normal(n, 3, 3)
-        s = 0.5 * (a + a.transpose(-1, -2))
-        trace = torch.diagonal(s, dim1=-2, dim2=-1).mean(-1)[:, None, None]
-        s = s - trace * torch.eye(3, dtype=f64)
-        s = s / math.sqrt(10.0)  # <S_ij S_ij> = 5 / 10
-        omega = normal(n, 3) / math.sqrt(3.0)
-        strain = torch.stack((s[:, 0, 0], s[:, 1, 1], s[:, 0, 1], s[:, 0, 2], s[:, 1, 2]), -1)
-        q = torch.cat((torch.zeros(n, 3, dtype=f64), strain, omega), -1)
-        e_r = torch.tensor([0.0, 0.0, 1.0], dtype=f64)
-        signals = compute_signals_3d(q, orient, e_r.expand(n, 3), 1.0)
-    else:
-        orient = torch.rand(n, generator=g, dtype=f64) * (2 * math.pi)
-        strain = normal(n, 2) / math.sqrt(8.0)
-        omega = normal(n, 1)
-        q = torch.cat((torch.zeros(n, 2, dtype=f64), strain, omega), -1)
-        e_r = torch.tensor([1.0, 0.0], dtype=f64)
-        signals = compute_signals(q, orient, e_r.expand(n, 2), 1.0)
+    body_ = body(dim)
+    orient, q, e_r = body_.isotropic_state(n, g, torch.float64)
+    signals = body_.signals(q, orient, e_r.expand(n, dim), 1.0)
     return GaussianStates(dim, q, orient, e_r, signals)

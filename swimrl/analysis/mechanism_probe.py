@@ -27,8 +27,8 @@ $\mathbb S = (\mathbb G + \mathbb G^{\mathsf T})/2 - \tfrac13\mathrm{tr}\,\mathb
 $\mathbb G$ of independent standard normal entries, times $1/\sqrt{10}$
 ($\langle S_{ij}S_{ij}\rangle = 1/2$; isotropic: $\langle S_{nn}^2\rangle = 1/15$,
 $\langle S_{np_1}^2\rangle = 1/20$) and vorticity components of variance 1/3; $\tau_K = 1$.
-They are turned into signals by :func:`~swimrl.physics.signals.compute_signals` and
-:func:`~swimrl.physics.signals3d.compute_signals_3d`
+They are turned into signals by :func:`~swimrl.physics.body2d.compute_signals` and
+:func:`~swimrl.physics.body3d.compute_signals_3d`
 (:func:`~swimrl.analysis.gaussian_states.gaussian_states`), the same samples for every
 strategy of a dimension. ``flows``: the signals and actions along the
 strategy's own trajectories (:class:`~swimrl.evaluation.trajectories.TrajectoryRecorder`,
@@ -62,11 +62,9 @@ from swimrl.errors import ConfigError, as_float, as_int, keep_number_types, one_
 from swimrl.evaluation.rollout import evaluate_shared
 from swimrl.evaluation.trajectories import TrajectoryRecorder
 from swimrl.flows.labels import ku_name
-from swimrl.physics.signals import SHAPE_SIGNAL, SIGNAL_NAMES, signal_indices
-from swimrl.physics.signals3d import SIGNAL_NAMES_3D
+from swimrl.physics.body import BODIES, SHAPE_SIGNAL, body_of_signals, observable
 from swimrl.physics.tumbling import stabilising_shape, tumbling_rate
 from swimrl.policies.baselines import ShortTimeOptimal, StrategySpec, build_strategy
-from swimrl.policies.baselines3d import ShortTimeOptimal3D
 from swimrl.policies.networks import action_spec
 from swimrl.runs.policy_files import load_policy
 from swimrl.runs.spec import RunSpec
@@ -83,20 +81,14 @@ RECORD, TABLE, FIGURE = "probe.json", "probe.md", "probe.png"
 
 
 
-def signal_names(dim: int) -> tuple[str, ...]:
-    """All signals of the dimension ``dim`` (2 or 3), in the ``signals`` key's order."""
-    return SIGNAL_NAMES_3D if dim == 3 else SIGNAL_NAMES
-
-
 # --- STO, beside the tumbling quantities of :mod:`swimrl.physics.tumbling` ----------------
 
 
-def sto_shape(signals: torch.Tensor, dim: int, shape_factor_max: float) -> torch.Tensor:
+def sto_shape(signals: torch.Tensor, shape_factor_max: float) -> torch.Tensor:
     """STO's shape factor on ``signals`` ``(..., 5 | 7)``: the baselines'
-    :class:`~swimrl.policies.baselines.ShortTimeOptimal` (2D) and
-    :class:`~swimrl.policies.baselines3d.ShortTimeOptimal3D`, ``(...)``."""
-    rule = ShortTimeOptimal3D if dim == 3 else ShortTimeOptimal
-    return rule(shape_factor_max)(signals)[..., 0]
+    :class:`~swimrl.policies.baselines.ShortTimeOptimal` (the body read from the signals'
+    width), ``(...)``."""
+    return ShortTimeOptimal(shape_factor_max)(signals)[..., 0]
 
 
 # --- the configuration ---------------------------------------------------------------------
@@ -105,13 +97,14 @@ def sto_shape(signals: torch.Tensor, dim: int, shape_factor_max: float) -> torch
 def signals_dimension(names: Sequence[str]) -> int | None:
     """2 or 3 where ``names`` hold a signal of one dimension only (``n_theta`` or
     ``S_np1``, ...), None where they could be either (``n_r``, ``S_nn``)."""
-    only2 = set(SIGNAL_NAMES) - set(SIGNAL_NAMES_3D)
-    only3 = set(SIGNAL_NAMES_3D) - set(SIGNAL_NAMES)
-    has2, has3 = bool(only2 & set(names)), bool(only3 & set(names))
-    if has2 and has3:
-        raise ConfigError(f"signals {list(names)} mix 2D {sorted(only2 & set(names))} and 3D "
-                          f"{sorted(only3 & set(names))} signals")
-    return 3 if has3 else 2 if has2 else None
+    own = {b.dim: set(b.signal_names).difference(*(o.signal_names for o in BODIES.values()
+                                                    if o is not b))
+           for b in BODIES.values()}
+    has = [d for d, only in own.items() if only & set(names)]
+    if len(has) > 1:
+        mix = " and ".join(f"{d}D {sorted(own[d] & set(names))}" for d in has)
+        raise ConfigError(f"signals {list(names)} mix {mix} signals")
+    return has[0] if has else None
 
 
 def policy_dimension(spec: str, signals: Sequence[str], flow_name: str, flow_dim: int,
@@ -230,16 +223,16 @@ KEYS = ("lambda_mean", "corr_sto", "corr_star", "corr_sto_star",
         *(f"tumbling_{r}" for r in RATES))
 
 
-def _values(signals: torch.Tensor, lam: torch.Tensor, dim: int, shape_factor_max: float,
+def _values(signals: torch.Tensor, lam: torch.Tensor, shape_factor_max: float,
             independent: bool = False) -> tuple[dict, dict]:
     """The probe's quantities (:data:`KEYS`) of one set of aligned states (signals
     ``(n, d)``, the strategy's ``lam`` ``(n,)``), and, for ``independent`` states, their
     SEMs (else None each)."""
-    sto = sto_shape(signals, dim, shape_factor_max)
-    star = stabilising_shape(signals, signal_names(dim), shape_factor_max)
+    names = body_of_signals(signals).signal_names
+    sto = sto_shape(signals, shape_factor_max)
+    star = stabilising_shape(signals, names, shape_factor_max)
     shapes = {"zero": torch.zeros_like(lam), "subject": lam, "sto": sto, "star": star}
     arrays = {"lambda_mean": lam.double().numpy()}
-    names = signal_names(dim)
     arrays.update({f"tumbling_{r}": tumbling_rate(signals, names, shapes[r]).double().numpy()
                    for r in RATES})
     n = len(lam)
@@ -257,7 +250,7 @@ def _values(signals: torch.Tensor, lam: torch.Tensor, dim: int, shape_factor_max
     return values, sems
 
 
-def mechanism_stats(signals: torch.Tensor, lam: torch.Tensor, dim: int, shape_factor_max: float,
+def mechanism_stats(signals: torch.Tensor, lam: torch.Tensor, shape_factor_max: float,
                     n_r_min: float, flows: torch.Tensor | None = None) -> dict:
     """The probe's record of one strategy on one set of states: the states with
     ``n_r > n_r_min`` of ``signals`` ``(n, 5 | 7)`` and the strategy's shape factors ``lam``
@@ -275,9 +268,9 @@ def mechanism_stats(signals: torch.Tensor, lam: torch.Tensor, dim: int, shape_fa
     """
     signals = signals.double()
     lam = lam.double()
-    aligned = signals[:, SIGNAL_NAMES.index("n_r")] > n_r_min  # n_r: first in 2D and 3D
+    aligned = signals[:, body_of_signals(signals).signal_names.index("n_r")] > n_r_min
     s, lam_a = signals[aligned], lam[aligned]
-    values, sems = _values(s, lam_a, dim, shape_factor_max, independent=flows is None)
+    values, sems = _values(s, lam_a, shape_factor_max, independent=flows is None)
     per_flow = None
     if flows is not None:
         fa = flows[aligned]
@@ -285,7 +278,7 @@ def mechanism_stats(signals: torch.Tensor, lam: torch.Tensor, dim: int, shape_fa
         per_flow = {key: [] for key in ("n_aligned", *KEYS)}
         for f in ids:
             m = fa == f
-            vals, _ = _values(s[m], lam_a[m], dim, shape_factor_max)
+            vals, _ = _values(s[m], lam_a[m], shape_factor_max)
             per_flow["n_aligned"].append(int(m.sum()))
             for key in KEYS:
                 per_flow[key].append(_num(vals[key]))
@@ -312,16 +305,16 @@ def _actor(subject: Subject) -> torch.nn.Module:
     if subject.strategy.name == "policy":
         return load_policy(str(subject.policy), subject.params)
     spec = action_spec(subject.params.shape_factor_max, dtype=torch.float32)
-    return build_strategy(subject.strategy, spec, subject.dimension)
+    return build_strategy(subject.strategy, spec)
 
 
-def actions(actor, signals: torch.Tensor, params: EnvParams, dim: int) -> torch.Tensor:
-    """The actor's shape factor ``(n,)`` at the signals ``(n, 5 | 7)`` (all of the
-    dimension; the observation is the actor's subset ``params.signals``), clamped to
+def actions(actor, signals: torch.Tensor, params: EnvParams) -> torch.Tensor:
+    """The actor's shape factor ``(n,)`` at the signals ``(n, 5 | 7)`` (all of a body's;
+    the observation is the actor's subset ``params.signals``), clamped to
     ``[-Lambda_max, Lambda_max]`` as the environment applies it."""
-    idx = signal_indices(params.signals, signal_names(dim))
     x = signals.to(torch.float32)
-    td = TensorDict({"signals": x, "observation": x[:, idx]}, batch_size=[x.shape[0]])
+    obs = observable(body_of_signals(x), x, params.signals)
+    td = TensorDict({"signals": x, "observation": obs}, batch_size=[x.shape[0]])
     with torch.no_grad():
         lam = actor(td).get("action")[..., 0]
     lam_max = params.shape_factor_max
@@ -398,9 +391,9 @@ def run_probe(cfg: ProbeConfig, log=None) -> dict:
                               "tau_K": 1.0, "dimensions": sorted(samples)}
         for subject, actor in zip(cfg.subjects, actors, strict=True):
             g = samples[subject.dimension]
-            lam = actions(actor, g.signals, subject.params, subject.dimension)
-            stats = mechanism_stats(g.signals, lam, subject.dimension,
-                                    subject.params.shape_factor_max, st.n_r_min)
+            lam = actions(actor, g.signals, subject.params)
+            stats = mechanism_stats(g.signals, lam, subject.params.shape_factor_max,
+                                    st.n_r_min)
             rows.append(_row(subject, "gaussian", stats))
     if "flows" in st.states:
         groups: list[list[int]] = []
@@ -424,8 +417,8 @@ def run_probe(cfg: ProbeConfig, log=None) -> dict:
                          "swimmer_substeps_per_s": rec[0]["swimmer_substeps_per_s"]})
             for i, r in zip(grp, rec, strict=True):
                 s = cfg.subjects[i]
-                stats = mechanism_stats(r["signals"], r["Lambda"], s.dimension,
-                                        s.params.shape_factor_max, st.n_r_min, r["flow"])
+                stats = mechanism_stats(r["signals"], r["Lambda"], s.params.shape_factor_max,
+                                        st.n_r_min, r["flow"])
                 rows.append(_row(s, "flows", {"R_hat_mean": r["R_hat_mean"],
                                               "R_hat_sem": r["R_hat_sem"], **stats}))
         record["flows"] = {"evaluations": runs, "decisions": "every decision but the first "

@@ -10,7 +10,7 @@ r"""What a policy does, from its recorded decisions: binned policy maps and the 
   (paper Sec. IV: 82 % for ``q = 1 %`` at Ku = 10^7).
 
 Recorded signals are arrays ``(..., 5)`` in the order of
-:data:`~swimrl.physics.signals.SIGNAL_NAMES` (:data:`SIGNAL`: a name's position).
+:data:`~swimrl.physics.body2d.SIGNAL_NAMES` (:data:`SIGNAL`: a name's position).
 """
 
 from __future__ import annotations
@@ -19,7 +19,7 @@ from collections.abc import Sequence
 
 import numpy as np
 
-from swimrl.physics.signals import SIGNAL_NAMES
+from swimrl.physics.body2d import SIGNAL_NAMES
 
 #: Position of each signal in the last axis of a recorded ``signals`` array.
 SIGNAL = {name: i for i, name in enumerate(SIGNAL_NAMES)}

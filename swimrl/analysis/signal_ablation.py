@@ -23,7 +23,7 @@ import numpy as np
 
 from swimrl.evaluation.statistics import mean_std_sem
 from swimrl.flows.labels import ku_display
-from swimrl.physics.signals import SIGNAL_NAMES
+from swimrl.physics.body2d import SIGNAL_NAMES
 from swimrl.policies.baselines import StrategyLabel
 from swimrl.runs.curves import read_curves
 from swimrl.runs.layout import RunLayout

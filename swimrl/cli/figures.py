@@ -19,7 +19,7 @@ from omegaconf import DictConfig
 from swimrl.cli import command
 from swimrl.paper.build import build_figures
 from swimrl.paper.config import figures_config
-from swimrl.paper.records import FiguresConfig
+from swimrl.paper.settings import FiguresConfig
 
 
 def check(cfg: DictConfig, out: Path | None) -> FiguresConfig:

@@ -27,9 +27,10 @@ from tensordict.nn import TensorDictModule
 from torch import nn
 from tqdm.auto import tqdm
 
-from swimrl.env import EnvParams, SwimmerEnv
+from swimrl.env import EnvParams, SwimmerEnv, build_env
 from swimrl.errors import ConfigError, as_bool
-from swimrl.flows.build import FLOW_WORK_BYTES, StoredRunSpec, flow_table_bytes
+from swimrl.flows.build import FLOW_WORK_BYTES, flow_table_bytes
+from swimrl.flows.dns.flow import StoredRunSpec
 from swimrl.flows.dns.store import store_record
 from swimrl.policies.baselines import StrategySpec, build_strategy
 from swimrl.runs.jobs import EvaluationInterruptedError, Preemption
@@ -213,11 +214,11 @@ def evaluate_shared(setup: RunSpec, actors: Sequence[Actor], desc: str = "eval",
     t_start = time.perf_counter() - sum(chunk["wall_s"] for chunk in done)
     for c, n_c in enumerate(chunks[len(done):], start=len(done)):
         t_chunk = time.perf_counter()
-        env = SwimmerEnv.build(setup.flow, params, setup.runtime, n_c, k * s,
-                               chunk_seed(setup.seed, c), ic_blocks=k)
+        env = build_env(setup.flow, params, setup.runtime, n_c, k * s,
+                        chunk_seed(setup.seed, c), ic_blocks=k)
         if router is None:
             spec = env.action_spec_unbatched
-            modules = [build_strategy(a, spec, env.dim) if isinstance(a, StrategySpec) else a
+            modules = [build_strategy(a, spec) if isinstance(a, StrategySpec) else a
                        for a in actors]
             modules = [m.to(setup.runtime.device) for m in modules]
             router = modules[0] if k == 1 else SplitActor(modules, s)

@@ -10,13 +10,13 @@ conditions, same rollout), so ``|x(T) - x_0| / (v_s T)`` of a recorded swimmer i
 
 The arrays (:meth:`TrajectoryRecorder.arrays`), with ``F`` flows, ``K`` strategies, ``n``
 swimmers and ``N`` decisions; lengths in ``l_f``, times in ``tau_K``, signals as in
-:mod:`swimrl.physics.signals`:
+:mod:`swimrl.physics.body2d`:
 
 * ``signals`` ``(F, K, n, N, 5)``, ``Lambda`` ``(F, K, n, N)`` (the action, clamped to
   ``[-Lambda_max, Lambda_max]`` as the environment applies it);
 * ``position`` ``(F, K, n, N+1, d)``, ``time`` ``(N+1,)``, and the orientation: in 2D
   ``theta`` ``(F, K, n, N+1)``, in 3D ``orientation`` ``(F, K, n, N+1, 3)`` (the unit vector
-  ``n``; the signals are then the seven of :mod:`swimrl.physics.signals3d`,
+  ``n``; the signals are then the seven of :mod:`swimrl.physics.body3d`,
   ``signal_names`` says which);
 * ``R_hat`` ``(F, K, n)``, ``reference_distance`` ``v_s T``, ``box`` the period ``L`` (NaN for
   an unbounded flow);
@@ -36,7 +36,7 @@ import numpy as np
 import torch
 from tensordict import TensorDictBase
 
-from swimrl.physics.signals import SIGNAL_NAMES
+from swimrl.physics.body2d import SIGNAL_NAMES
 from swimrl.runs.records import write_npz
 
 
@@ -61,7 +61,7 @@ class TrajectoryRecorder:
         self._sel = torch.tensor([k * block + i for k in range(n_blocks) for i in range(self.n)],
                                  device=env.device)
         self._shape = (n_blocks, self.n)
-        self._orient = "orientation" if env.dim == 3 else "theta"
+        self._orient = env.body.orientation_name
         self._cur = {"signals": [], "Lambda": [], "position": [], self._orient: []}
         grid = getattr(env.flow, "grid", None)
         self.meta = {"reference_distance": float(env.reference_distance),
@@ -84,8 +84,7 @@ class TrajectoryRecorder:
         env, sel = self._env, self._sel
         x = (env.start_position() + env.displacement())[:, sel]
         self._cur["position"].append(x.cpu())
-        orient = env.orientation if self._orient == "orientation" else env.theta
-        self._cur[self._orient].append(orient[:, sel].cpu())
+        self._cur[self._orient].append(env.orientation[:, sel].cpu())
 
     def __call__(self, i: int, td: TensorDictBase) -> None:
         """Decision ``i``: signals and action (before the step) and the state."""
@@ -103,7 +102,7 @@ class TrajectoryRecorder:
         self._field(self._env.params.n_decisions)
         f = r_hat.shape[0]
         shape = (f, *self._shape)
-        out = {k: torch.stack(v, dim=2).numpy() for k, v in self._cur.items()}
+        out = {k: torch.stack(v, 2).numpy() for k, v in self._cur.items()}
         chunk = {k: v.reshape(shape + v.shape[2:]) for k, v in out.items()}
         chunk["R_hat"] = r_hat[:, self._sel].cpu().double().numpy().reshape(shape)
         env = self._env

@@ -40,9 +40,10 @@ components, space average) and $\tau_K = \langle A_{ij}A_{ij}\rangle^{-1/2}$.
   $\tau_K = 1/(Uk)$.
 
 Each is a flow of the registry (:mod:`swimrl.flows.registry`): ``flow=linear``, ``flow=abc``,
-``flow=taylor_green`` (``conf/flow/*.yaml``). Their realisations are identical (the flows
-are deterministic); the swimmers start uniformly in ``[0, start_box)^d`` (one period of the
-periodic flows, the origin of the linear flow).
+``flow=taylor_green`` (``conf/flow/*.yaml``; their specs and entries ``LINEAR_ENTRY``,
+``ABC_ENTRY``, ``TAYLOR_GREEN_ENTRY`` at the end of this module). Their realisations are
+identical (the flows are deterministic); the swimmers start uniformly in
+``[0, start_box)^d`` (one period of the periodic flows, the origin of the linear flow).
 """
 
 from __future__ import annotations
@@ -55,8 +56,8 @@ import torch
 
 from swimrl.conf_values import yaml_value
 from swimrl.errors import fail, keep_number_types, require
+from swimrl.flows.entry import POINT_KERNELS, FlowEntry
 from swimrl.flows.pointwise import PointFlow
-from swimrl.flows.registry import POINT_KERNELS, FlowEntry, register_flow
 
 #: The config key of the linear flow's matrix, and what it may be.
 GRADIENT_KEY = "flow.gradient"
@@ -163,7 +164,7 @@ class ABCFlow(PointFlow):
     diagonal ($u_x$ depends on $y, z$ only, ...), so $\mathrm{tr}\,\mathbb A = 0$ exactly.
     """
 
-    dim = 3
+    dim: int = 3
 
     def __init__(self, n_flows: int = 1, terms: Sequence = ((1.0, 1.0, 1.0, 1.0),),
                  modulation: float = 0.0, frequency: float = 0.0,
@@ -232,7 +233,7 @@ class TaylorGreenFlow(PointFlow):
     $u_\mathrm{rms} = U/\sqrt2$, $\tau_K = 1/(Uk)$, vorticity $\omega = 2Uk\sin kx\sin ky$.
     """
 
-    dim = 2
+    dim: int = 2
 
     def __init__(self, n_flows: int = 1, amplitude: float = 1.0, wavenumber: float = 1.0,
                  device: torch.device | str = "cpu", dtype: torch.dtype = torch.float32):
@@ -326,18 +327,21 @@ def _linear_dimension(flow) -> int:
     return len(flow["gradient"] if isinstance(flow, Mapping) else flow.gradient)
 
 
-register_flow(FlowEntry(
+#: ``flow=linear`` in the registry (:data:`swimrl.flows.registry.BUILTIN_FLOWS`).
+LINEAR_ENTRY = FlowEntry(
     "linear", LinearSpec,
     lambda spec, n, device, dtype, generator, interval, duration:
     LinearFlow(spec.gradient, n, device, dtype), _linear_dimension,
-    kernels=POINT_KERNELS))
-register_flow(FlowEntry(
+    kernels=POINT_KERNELS)
+#: ``flow=abc`` in the registry.
+ABC_ENTRY = FlowEntry(
     "abc", ABCSpec,
     lambda spec, n, device, dtype, generator, interval, duration:
     ABCFlow(n, spec.terms, spec.modulation, spec.frequency, device, dtype), 3,
-    kernels=POINT_KERNELS))
-register_flow(FlowEntry(
+    kernels=POINT_KERNELS)
+#: ``flow=taylor_green`` in the registry.
+TAYLOR_GREEN_ENTRY = FlowEntry(
     "taylor_green", TaylorGreenSpec,
     lambda spec, n, device, dtype, generator, interval, duration:
     TaylorGreenFlow(n, spec.amplitude, spec.wavenumber, device, dtype), 2,
-    kernels=POINT_KERNELS))
+    kernels=POINT_KERNELS)

@@ -8,24 +8,13 @@ the random-Fourier-mode 3D stochastic flow of :mod:`swimrl.flows.stochastic3d`. 
 keeps its own time $t$ (``(F,)``, float64) and its reference scales ``u_rms`` (the total
 rms $\langle\boldsymbol u\cdot\boldsymbol u\rangle^{1/2}$, ``None`` where the flow has none)
 and ``tau_k`` $= \langle A_{ij}A_{ij}\rangle^{-1/2}$, the conventions of the 2D flows
-(:mod:`swimrl.flows.stochastic`). The 2D swimmer's five channels follow from
-$(\boldsymbol u, \mathbb A)$ by :func:`channels_2d`.
+(:mod:`swimrl.flows.stochastic`). The swimmer's channels follow from
+$(\boldsymbol u, \mathbb A)$ by its body (:meth:`swimrl.physics.body.Body.channels`).
 """
 
 from __future__ import annotations
 
 import torch
-
-
-def channels_2d(u: torch.Tensor, grad: torch.Tensor) -> torch.Tensor:
-    r"""The five 2D channels $(u_x, u_y, S_{xx}, S_{xy}, \omega)$ of
-    :data:`swimrl.flows.base.CHANNELS` from ``u`` ``(..., 2)`` and
-    $A_{ij} = \partial_j u_i$ ``(..., 2, 2)``:
-    $S_{xx} = A_{xx}$, $S_{xy} = (A_{xy} + A_{yx})/2$, $\omega = A_{yx} - A_{xy}$
-    (incompressible: $S_{yy} = A_{yy} = -S_{xx}$)."""
-    return torch.stack((u[..., 0], u[..., 1], grad[..., 0, 0],
-                        0.5 * (grad[..., 0, 1] + grad[..., 1, 0]),
-                        grad[..., 1, 0] - grad[..., 0, 1]), -1)
 
 
 def vorticity(grad: torch.Tensor) -> torch.Tensor:

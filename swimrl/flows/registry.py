@@ -1,103 +1,77 @@
 r"""Flows by name: the registry behind ``flow=<name>``.
 
-A flow is one module of :mod:`swimrl.flows` that calls :func:`register_flow` with a
-:class:`FlowEntry` (its config name, the frozen dataclass of its ``flow.*`` keys, the
-function that builds ``n_flows`` realisations, its dimension) and one
-``conf/flow/<name>.yaml`` holding every key of that dataclass. :func:`flow_entry` imports
-every module of the package once (so a new module is found without an edit elsewhere) and
-returns the entry; :func:`~swimrl.flows.build.build_flow` and the config mapping
-(:func:`swimrl.config.flow_spec`) only look entries up. The entry's ``spec`` checks its
-values on construction (one :class:`~swimrl.errors.ConfigError` naming the ``flow.*`` key).
+A flow is one module (``swimrl/flows/<name>.py`` or ``swimrl/flows/<name>/``) holding the
+flow, the frozen dataclass of its ``flow.*`` keys, its builder and its
+:class:`~swimrl.flows.entry.FlowEntry` (``<NAME>_ENTRY``), and one ``conf/flow/<name>.yaml``
+holding every key of that dataclass. :data:`BUILTIN_FLOWS` is the one table of swimrl's flows,
+``flow=<name>`` -> its entry, imported from the flow's module; :func:`register_flow` adds a
+flow defined outside the package (a recipe's module, imported by a Hydra callback).
+:func:`flow_entry` returns the entry; :func:`~swimrl.flows.build.build_flow` and the config
+mapping (:func:`swimrl.config.flow_spec`) only look entries up. The entry's ``spec`` checks
+its values on construction (one :class:`~swimrl.errors.ConfigError` naming the ``flow.*``
+key).
 """
 
 from __future__ import annotations
 
-import importlib
-import pkgutil
-from collections.abc import Callable, Mapping
-from dataclasses import dataclass
-from typing import Any
+from collections.abc import Mapping
+from types import MappingProxyType
 
 from swimrl.errors import one_of
+from swimrl.flows.analytic import ABC_ENTRY, LINEAR_ENTRY, TAYLOR_GREEN_ENTRY
+from swimrl.flows.dns.flow import DNS_ENTRY, DNS_REPLAY_ENTRY
+from swimrl.flows.entry import POINT_KERNELS, FlowEntry
+from swimrl.flows.stochastic import STOCHASTIC_ENTRY
+from swimrl.flows.stochastic3d import STOCHASTIC3D_ENTRY
 
-#: ``build(spec, n_flows, device, dtype, generator, interval, duration) -> flow``, with
-#: ``interval`` and ``duration`` ``T_u`` and ``T`` in units of ``tau_K``.
-Builder = Callable[..., Any]
-#: ``given(node, device, dtype) -> {field: value}``: the spec fields made from several keys
-#: (or renamed), from the ``flow`` node as plain containers.
-Given = Callable[[Mapping, Any, Any], dict]
-#: The kernels of a flow evaluated at points (:class:`~swimrl.env.PointSwimmerEnv`).
-POINT_KERNELS = ("auto", "eager", "compiled")
-#: ``table_bytes(spec, n_flows, dtype, interval) -> bytes`` the realisations hold.
-TableBytes = Callable[..., int]
+# POINT_KERNELS is defined in swimrl.flows.entry; swimrl.env reads it from here.
+__all__ = ["BUILTIN_FLOWS", "POINT_KERNELS", "flow_dimension", "flow_entry", "flow_names",
+           "register_flow"]
 
-
-@dataclass(frozen=True)
-class FlowEntry:
-    """One flow of the registry.
-
-    Parameters
-    ----------
-    name
-        ``flow=<name>``, also the spec's ``name`` field and the yaml's ``name`` key.
-    spec
-        The frozen dataclass of the ``flow.*`` keys (checked on construction).
-    build
-        Builds ``n_flows`` realisations of a spec (:data:`Builder`).
-    dimension
-        2 (the plane, gridded or point flows) or 3; or a function of the spec (or of the
-        ``flow`` node as a mapping) for a flow of either (``flow=linear``).
-    given
-        Spec fields not read by name from ``flow.*`` (:data:`Given`; None: all are).
-    table_bytes
-        Memory the realisations hold (:data:`TableBytes`; None: negligible, 0).
-    kernels
-        The ``kernel`` values the flow runs with (None: all; a point flow: ``auto``,
-        ``eager``, ``compiled``).
-    """
-
-    name: str
-    spec: type
-    build: Builder
-    dimension: int | Callable[[Any], int]
-    given: Given | None = None
-    table_bytes: TableBytes | None = None
-    kernels: tuple[str, ...] | None = None
-
+BUILTIN_FLOWS: Mapping[str, FlowEntry] = MappingProxyType({
+    "stochastic": STOCHASTIC_ENTRY,
+    "dns_replay": DNS_REPLAY_ENTRY,
+    "dns": DNS_ENTRY,
+    "stochastic3d": STOCHASTIC3D_ENTRY,
+    "linear": LINEAR_ENTRY,
+    "abc": ABC_ENTRY,
+    "taylor_green": TAYLOR_GREEN_ENTRY,
+})
+"""swimrl's flows: ``flow=<name>`` (``conf/flow/<name>.yaml``) -> its entry, defined with the
+flow in ``swimrl/flows/<name>.py`` (the DNS flows in ``swimrl/flows/dns/flow.py``, the
+analytic flows together in ``swimrl/flows/analytic.py``)."""
 
 _ENTRIES: dict[str, FlowEntry] = {}
-_DISCOVERED = False
 
 
 def register_flow(entry: FlowEntry) -> FlowEntry:
-    """Add ``entry`` (a second entry of the same name replaces the first); returns it."""
+    """Add ``entry`` (a second entry of the same name replaces the first); returns it.
+
+    swimrl's own flows are those of :data:`BUILTIN_FLOWS`; this is for a flow defined
+    outside the package (``examples/recipes/oscillating_cells.py``)."""
     if not callable(entry.dimension) and entry.dimension not in (2, 3):
         raise ValueError(f"flow {entry.name!r}: dimension {entry.dimension} is not 2 or 3")
     _ENTRIES[entry.name] = entry
     return entry
 
 
-def _discover() -> None:
-    """Import every module of :mod:`swimrl.flows` once (each registers its flows)."""
-    global _DISCOVERED
-    if _DISCOVERED:
-        return
-    _DISCOVERED = True
-    package = importlib.import_module("swimrl.flows")
-    for info in pkgutil.iter_modules(package.__path__):
-        if not info.name.startswith("_"):
-            importlib.import_module(f"swimrl.flows.{info.name}")
+def _register_builtin() -> None:
+    for name, entry in BUILTIN_FLOWS.items():
+        if entry.name != name:
+            raise ValueError(f"flow {name!r}: its entry is named {entry.name!r}")
+        register_flow(entry)
+
+
+_register_builtin()
 
 
 def flow_names() -> tuple[str, ...]:
     """The registered flows' names, sorted."""
-    _discover()
     return tuple(sorted(_ENTRIES))
 
 
 def flow_entry(name: str) -> FlowEntry:
     """The entry of ``flow=<name>``; an unknown name is a ConfigError naming ``flow.name``."""
-    _discover()
     one_of("flow.name", name, flow_names())
     return _ENTRIES[name]
 

@@ -46,7 +46,7 @@ from swimrl.flows.grid import PeriodicGrid
 
 
 class SnapshotSource(Protocol):
-    """What a replay needs from a set of runs (:mod:`swimrl.flows.sources`).
+    """What a replay needs from a set of runs (:mod:`swimrl.flows.dns.sources`).
 
     ``n_times`` is the number of stored snapshots per run, or None for runs that produce
     them on demand; such a source's newest snapshot is ``latest``. ``realisation_per_flow``:

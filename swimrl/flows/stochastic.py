@@ -82,16 +82,22 @@ issue 11 item 6 evaluates the others at Ku = 1e7, ``docs/results.md``):
   $0.5\,\langle\boldsymbol u\cdot\boldsymbol u\rangle^{1/2}$ and Ku reads $\mathrm{Ku}\sqrt2$ in
   the default's units; $\tau_K = 0.5$ is unchanged.
 * The box $L$ = ``n_grid * spacing`` (10 $\ell_f$ by default) is set by ``n_grid``.
+
+``flow=stochastic``: :class:`StochasticSpec` (the ``flow.*`` keys), its builder and
+:data:`STOCHASTIC_ENTRY`, the registry's entry (:mod:`swimrl.flows.registry`).
 """
 
 from __future__ import annotations
 
 import math
+from dataclasses import dataclass
 
 import torch
 
 from swimrl.conf_values import yaml_value
+from swimrl.errors import as_float, as_int, keep_number_types, one_of, require
 from swimrl.flows.base import GriddedFlow
+from swimrl.flows.entry import FlowEntry
 from swimrl.flows.grid import PeriodicGrid
 
 #: Kolmogorov time of the model in units ell_f / u_rms (see module docstring).
@@ -345,3 +351,77 @@ class StochasticFlow(OUCoefficients, GriddedFlow):
             self.coeffs[idx] = (xi / xi.norm(dim=1, keepdim=True)).to(self.dtype)
         self.time[idx] = 0.0
 
+
+
+# -- flow=stochastic: the spec, its builder and the registry's entry ----------------------------
+@dataclass(frozen=True)
+class StochasticSpec:
+    r"""``flow=stochastic``: the paper's flow at Kubo number ``kubo`` (Sec. II B).
+
+    ``basis``, ``basis_seed``, ``amplitudes``, ``velocity_scale``: readings of the paper's
+    text, defaults as written (module docstring). The defaults (for library calls) are read
+    from ``conf/flow/stochastic.yaml`` (:mod:`swimrl.conf_values`).
+
+    Parameters
+    ----------
+    kubo
+        $\mathrm{Ku} = \tau_f u_\mathrm{rms}/\ell_f$ (the paper: 0.1, 1, 10, 1e7).
+    n_modes
+        $M$, the stream-function components (the paper: 5).
+    n_grid
+        Grid nodes per side (the paper: 400).
+    spacing
+        Grid spacing in units of $\ell_f$ (the paper: 0.025; box ``n_grid * spacing``).
+    basis
+        ``redrawn`` (new components per flow) or ``fixed`` (one set, from ``basis_seed``).
+    basis_seed
+        The seed of the fixed components.
+    amplitudes
+        ``stationary`` ($c_i(0)\sim\mathcal N(0, 1/M)$) or ``normalised`` (on the unit sphere).
+    velocity_scale
+        ``total`` ($v_s$ and Ku against $\langle\boldsymbol u\cdot\boldsymbol u\rangle^{1/2}$) or
+        ``component``.
+    name
+        The config group's name.
+    """
+
+    kubo: float
+    n_modes: int = yaml_value("flow/stochastic", "n_modes")
+    n_grid: int = yaml_value("flow/stochastic", "n_grid")
+    spacing: float = yaml_value("flow/stochastic", "spacing")
+    basis: str = yaml_value("flow/stochastic", "basis")
+    basis_seed: int = yaml_value("flow/stochastic", "basis_seed")
+    amplitudes: str = yaml_value("flow/stochastic", "amplitudes")
+    velocity_scale: str = yaml_value("flow/stochastic", "velocity_scale")
+    name: str = yaml_value("flow/stochastic", "name")
+
+    def __post_init__(self) -> None:
+        as_float("flow.kubo", self.kubo, lambda v: v > 0, "> 0 (e.g. 0.1, 1, 10, 1e7)")
+        as_int("flow.n_modes", self.n_modes)
+        n = self.n_grid
+        require(as_int("flow.n_grid", n, low=4) % 2 == 0, "flow.n_grid", n, "an even integer >= 4")
+        as_float("flow.spacing", self.spacing, lambda v: v > 0, "> 0 (units ell_f)")
+        one_of("flow.basis", self.basis, BASIS_MODES)
+        as_int("flow.basis_seed", self.basis_seed, low=0)
+        one_of("flow.amplitudes", self.amplitudes, AMPLITUDE_MODES)
+        one_of("flow.velocity_scale", self.velocity_scale, VELOCITY_SCALES)
+        keep_number_types(self)
+
+
+def _build(spec: StochasticSpec, n_flows, device, dtype, generator, interval,
+           duration) -> GriddedFlow:
+    return StochasticFlow(
+        n_flows, spec.kubo, spec.n_modes, spec.n_grid, spec.spacing, device=device,
+        dtype=dtype, generator=generator, basis=spec.basis, basis_seed=spec.basis_seed,
+        amplitudes=spec.amplitudes, velocity_scale=spec.velocity_scale,
+    )
+
+
+def _bytes(spec: StochasticSpec, n_flows: int, dtype: torch.dtype, interval: float) -> int:
+    """``F n^2 M 5`` values: the basis of ``n_flows`` realisations."""
+    size = torch.empty((), dtype=dtype).element_size()
+    return n_flows * spec.n_grid**2 * spec.n_modes * 5 * size
+
+
+#: ``flow=stochastic`` in the registry (:data:`swimrl.flows.registry.BUILTIN_FLOWS`).
+STOCHASTIC_ENTRY = FlowEntry("stochastic", StochasticSpec, _build, 2, table_bytes=_bytes)

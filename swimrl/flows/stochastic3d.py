@@ -94,7 +94,7 @@ with ``basis_seed`` and gives it to every realisation, which then differ only by
 (the ensemble moments then hold on average over ``basis_seed``, as in 2D).
 
 ``flow=stochastic3d`` (:class:`Stochastic3DSpec`, ``conf/flow/stochastic3d.yaml``) builds it
-through the flow registry (:mod:`swimrl.flows.registry`).
+through the flow registry (:mod:`swimrl.flows.registry`; the entry :data:`STOCHASTIC3D_ENTRY`).
 """
 
 from __future__ import annotations
@@ -107,8 +107,8 @@ import torch
 
 from swimrl.conf_values import yaml_value
 from swimrl.errors import as_float, as_int, keep_number_types, one_of
+from swimrl.flows.entry import POINT_KERNELS, FlowEntry
 from swimrl.flows.pointwise import PointFlow
-from swimrl.flows.registry import POINT_KERNELS, FlowEntry, register_flow
 from swimrl.flows.stochastic import OUCoefficients
 
 #: Kolmogorov time ``<A_ij A_ij>^{-1/2}`` in units ``ell_f / u_rms`` (module docstring).
@@ -192,7 +192,7 @@ class StochasticFlow3D(OUCoefficients, PointFlow):
     $\lfloor n/K\rfloor$; $R = F$ (redrawn) or 1 (fixed); :attr:`coeffs` ``(F, M)``.
     """
 
-    dim = 3
+    dim: int = 3
     u_rms = 1.0
     ell_f = 1.0
     tau_k = TAU_K
@@ -419,5 +419,6 @@ def _bytes(spec: Stochastic3DSpec, n_flows: int, dtype: torch.dtype, interval: f
     return n_flows * spec.n_modes * spec.n_waves * 15 * size
 
 
-register_flow(FlowEntry("stochastic3d", Stochastic3DSpec, _build, 3, table_bytes=_bytes,
-                        kernels=(*POINT_KERNELS, "fused")))  # fused: heun3d_cpu.cpp
+#: ``flow=stochastic3d`` in the registry (:data:`swimrl.flows.registry.BUILTIN_FLOWS`).
+STOCHASTIC3D_ENTRY = FlowEntry("stochastic3d", Stochastic3DSpec, _build, 3, table_bytes=_bytes,
+                               kernels=(*POINT_KERNELS, "fused"))  # fused: heun3d_cpu.cpp

@@ -38,16 +38,9 @@ from swimrl.runs.curves import read_curves
 from swimrl.runs.layout import RunLayout
 from swimrl.runs.records import markdown_table
 
-from .records import (
-    Evaluation,
-    FiguresConfig,
-    eval_setup,
-    figure_record,
-    per_flow_values,
-    record_sizes,
-    smart_policy,
-    under_shipped_before,
-)
+from .evaluations import Evaluation, eval_setup, per_flow_values, smart_policy
+from .records import figure_record, record_sizes
+from .settings import FiguresConfig, under_shipped_before
 from .style import COLORS, save, shown
 
 

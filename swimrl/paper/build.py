@@ -6,12 +6,14 @@ import time
 from collections.abc import Callable
 
 from .ablation import build_ablation
-from .beyond import build_beyond_energy, build_beyond_target, build_beyond_target_paths
+from .beyond_energy import build_beyond_energy
+from .beyond_paths import build_beyond_target_paths
+from .beyond_target import build_beyond_target
 from .dns import build_dns_flow
 from .mechanism import build_ku01, build_ku_inf, build_ku_pattern
-from .records import FiguresConfig
 from .robustness import build_robustness, build_robustness_noise
 from .seeds import build_seed_spread_figure
+from .settings import FiguresConfig
 from .stochastic import build_smart_performance, build_swimmer
 from .three_d import (
     build_three_d_curves_figure,
@@ -22,7 +24,7 @@ from .three_d import (
 from .training import build_training_curves
 from .videos import build_videos
 
-#: Figure name -> builder, in build order (the names: :data:`.records.FIGURES`).
+#: Figure name -> builder, in build order (the names: :data:`.settings.FIGURES`).
 BUILDERS: dict[str, Callable[[FiguresConfig], dict]] = {
     "swimmer": build_swimmer,
     "smartPerformance": build_smart_performance,

@@ -1,4 +1,4 @@
-"""``conf/figures.yaml`` -> :class:`~swimrl.paper.records.FiguresConfig` (``swimrl-figures``).
+"""``conf/figures.yaml`` -> :class:`~swimrl.paper.settings.FiguresConfig` (``swimrl-figures``).
 
 The figures' part of the config mapping, kept out of :mod:`swimrl.config` (which the library
 commands use) and made with its helpers: :func:`~swimrl.config.from_node`,
@@ -14,7 +14,7 @@ from omegaconf import DictConfig
 
 from swimrl.config import env_params, flow_spec, from_node, runtime
 
-from .records import DNSFiguresConfig, FiguresConfig
+from .settings import DNSFiguresConfig, FiguresConfig
 
 
 def figures_config(cfg: DictConfig) -> FiguresConfig:

@@ -1,5 +1,6 @@
-r"""Fig. ``dnsFlow`` and the DNS replay record (also drawn by videos 5, 10) from committed
-records (``swimrl-figures``).
+r"""Fig. ``dnsFlow`` from committed records (``swimrl-figures``): the DNS replay record
+(:mod:`.dns_replay`, also drawn by videos 5, 10), the pooled PDFs of ``swimrl-dns-plots``, the
+transfer records (:mod:`.dns_transfer`) and the DNS-trained runs' training curves.
 
 * (a) the vorticity ``omega tau_K`` of a held-out DNS realisation with one smart swimmer's
   trajectory over ``glyph_window`` ``tau_K`` and its shape every ``glyph_every`` ``tau_K``:
@@ -21,23 +22,15 @@ records (``swimrl-figures``).
   times of one stored run overlap, so their spread would understate it).
 
 No input of the figure may lie under ``shipped_before/`` (the policies shipped before the
-paper-budget runs): where ``dns.*`` names one (:func:`shipped_before_inputs`; the committed
-replay record names ``dns.policy``, and ``docs/results/shipped_before/README.md`` lists the
-replay record and the transfer comparisons as made with those policies), (a), (c), (d), (e)
-are not drawn and the figure is reported ``pending`` with the commands that remake them
-(:data:`REMAKE`); (b) and (f) are drawn.
-
-The replay record (``record``) is made once from a finished stored run when that run exists
-(``swimrl-dns seed=...``; the stores are too large to commit) and is then read from the
-committed ``.npz``: a fresh clone draws the figure and the videos without the store. The
-record keeps what it was made with (policy, store, sizes, seed, episode); a record made with
-other settings is not used (delete it to remake it). Lengths are in units of the DNS box
-``L`` (``reference_distance`` too).
+paper-budget runs): where ``dns.*`` names one (:func:`~.dns_replay.shipped_before_inputs`;
+the committed replay record names ``dns.policy``, and ``docs/results/shipped_before/README.md``
+lists the replay record and the transfer comparisons as made with those policies), (a), (c),
+(d), (e) are not drawn and the figure is reported ``pending`` with the commands that remake them
+(:data:`~.dns_replay.REMAKE`); (b) and (f) are drawn.
 """
 
 from __future__ import annotations
 
-import dataclasses
 import json
 import math
 from collections.abc import Sequence
@@ -46,26 +39,21 @@ from pathlib import Path
 import numpy as np
 
 from swimrl.analysis.plots import pyplot
-from swimrl.analysis.policy_maps import lambda_maps
-from swimrl.evaluation.statistics import paired_ratio
-from swimrl.flows.build import StoredRunSpec
-from swimrl.flows.dns.store import store_status
 from swimrl.policies.baselines import StrategyLabel
 from swimrl.runs.atomic import atomic_write_text
 from swimrl.runs.curves import read_curves
-from swimrl.runs.layout import RunLayout
-from swimrl.runs.policy_files import resolve_policy_file
-from swimrl.runs.records import markdown_table, read_npz, write_npz
-from swimrl.runs.spec import EvalSizes, RunSpec
 
-from .records import (
-    FRAME_EVERY,
-    DNSFiguresConfig,
-    FiguresConfig,
-    portable,
-    record_strategies,
-    under_shipped_before,
+from .dns_replay import dns_record, replay_markdown, replay_summary, shipped_before_pending
+from .dns_transfer import (
+    read_transfer,
+    realisation_names,
+    sample_std,
+    trained_ratio,
+    trained_ratio_markdown,
+    transfer_markdown,
+    transfer_summary,
 )
+from .settings import FiguresConfig, portable
 from .style import COLORS, LABEL, save
 
 #: Largest aspect ratio drawn for a glyph (the swimmers' own reach ~10 at |Lambda| = 0.98).
@@ -74,250 +62,11 @@ GLYPH_ASPECT_MAX = 4.0
 PDF_COLOURS = {"omega": "tab:blue", "S_xx": "tab:green", "S_xy": "tab:red"}
 
 
-#: How the DNS records are remade with the current policies (``{store}``, ``{record}``,
-#: ``{transfer}``: the ``dns.*`` paths).
-REMAKE = ("swimrl-dns seed=2 (the held-out store {store}; docs/dns.md), then rm {record} and "
-          "swimrl-figures only=dnsFlow dns.policy=pretrained/ku10 (and dns.policy=pretrained/ku10 "
-          "in conf/figures.yaml); the transfer: swimrl-dns -m seed=3,4,5 and the swimrl-compare "
-          "loop of docs/results.md, Fig. dnsFlow, into {transfer}/seed<s>")
-
-
-def shipped_before_inputs(dns: DNSFiguresConfig) -> list[str]:
-    """The ``dns.*`` inputs under ``shipped_before/`` (``KEY=VALUE``)."""
-    keys = ("policy", "trained", "store", "record", "transfer", "checks")
-    named = [(k, getattr(dns, k)) for k in keys if getattr(dns, k) is not None]
-    named += [("trained_seeds", t) for t in dns.trained_seeds]
-    named += [("curves", c) for c in dns.curves]
-    return [f"dns.{k}={v}" for k, v in named if under_shipped_before(v)]
-
-
-def shipped_before_pending(dns: DNSFiguresConfig) -> str:
-    """Why the DNS records are not drawn and how to remake them ("" where no input is under
-    ``shipped_before/``)."""
-    inputs = shipped_before_inputs(dns)
-    if not inputs:
-        return ""
-    return (f"{', '.join(inputs)} under shipped_before/: the replay record and the transfer "
-            "comparisons were made with the earlier policies; remake them: "
-            + REMAKE.format(store=portable(dns.store), record=portable(dns.record),
-                            transfer=portable(dns.transfer)))
-
-
-def replay_strategies(policy: str, trained: str) -> list[str]:
-    """The replay record's strategies, in its order: smart, naive, STO, the DNS-trained one."""
-    return [policy, "naive", "sto", trained]
-
-
 def spheroid_aspect(shape_factor: np.ndarray) -> np.ndarray:
     """Aspect ratio ``a = ((1 + Lambda) / (1 - Lambda))^{1/2}`` (inverse of
     ``Lambda = (a^2 - 1) / (a^2 + 1)``)."""
     lam = np.asarray(shape_factor, dtype=float)
     return np.sqrt((1 + lam) / (1 - lam))
-
-
-# -- the replay record ---------------------------------------------------------------------------
-def record_inputs(cfg: FiguresConfig, dns: DNSFiguresConfig) -> dict[str, str]:
-    """What a replay record depends on, as strings (kept in the record, compared on load)."""
-    return {"policy": dns.policy, "trained": dns.trained, "store": Path(dns.store).name,
-            "n_swimmers": str(dns.n_swimmers),
-            "n_traj": str(dns.n_traj), "decode_n": str(dns.decode_n), "seed": str(cfg.seed),
-            "params": json.dumps(dataclasses.asdict(cfg.params), sort_keys=True, default=str)}
-
-
-def make_record(cfg: FiguresConfig, dns: DNSFiguresConfig) -> dict[str, np.ndarray]:
-    """Smart (``dns.policy``), naive and STO from the same start time and initial conditions
-    in ``dns.store``: clouds and trajectories every :data:`FRAME_EVERY` decisions, the
-    vorticity of the run at those times, and smart's first ``n_traj`` swimmers at every
-    decision (position, orientation, Lambda). Lengths in units of the box."""
-    spec = StoredRunSpec((Path(dns.store),), decode_n=dns.decode_n)
-    sizes = EvalSizes(1, dns.n_swimmers, 1, cfg.progress, dns.n_swimmers)
-    setup = RunSpec(flow=spec, params=cfg.params, runtime=cfg.runtime, sizes=sizes,
-                      seed=cfg.seed, record={})
-    a = record_strategies(setup, replay_strategies(dns.policy, dns.trained), "DNS", FRAME_EVERY)
-    box = float(a["box"])
-    maps = {}  # the DNS-trained policy's maps (d), (e), as float32
-    for other, (mean, (x, y)) in lambda_maps(a["signals"][0, 3], a["Lambda"][0, 3]).items():
-        maps[f"map_{other}"] = mean.astype(np.float32)
-        maps[f"map_{other}_x"], maps[f"map_{other}_y"] = x, y
-    pos = np.swapaxes(a["position"], 0, 1)[:3, 0] / box  # (3, S, N+1, 2)
-    disp = pos - pos[..., :1, :]
-    nt = min(dns.n_traj, pos.shape[1])
-    return {
-        "cloud": disp[..., ::FRAME_EVERY, :].astype(np.float32),
-        "traj_abs": pos[:, :nt, ::FRAME_EVERY].astype(np.float32),
-        "smart_path": pos[0, :nt].astype(np.float32),
-        "smart_theta": np.swapaxes(a["theta"], 0, 1)[0, 0, :nt].astype(np.float32),
-        "smart_Lambda": np.swapaxes(a["Lambda"], 0, 1)[0, 0, :nt].astype(np.float32),
-        "R_hat": np.swapaxes(a["R_hat"], 0, 1)[:, 0],
-        "vorticity": a["vorticity"].astype(np.float16),
-        "field_time": a["field_time"],
-        "time": a["time"], "tau_K": a["tau_K"], "box": np.asarray(1.0),
-        "reference_distance": np.asarray(float(a["reference_distance"]) / box),
-        "box_dns": np.asarray(box), "update_interval": a["update_interval"],
-        **{f"input_{k}": np.asarray(v) for k, v in record_inputs(cfg, dns).items()},
-        **maps,
-    }
-
-
-def dns_record(cfg: FiguresConfig, dns: DNSFiguresConfig) -> tuple[dict | None, str]:
-    """``(record, "")``: the committed record, made from ``dns.store`` first if it is missing;
-    ``(None, why)`` when it is missing and cannot be made (no finished store, no policy) or
-    was made with other inputs."""
-    path = Path(dns.record)
-    if not path.exists():
-        status = store_status(dns.store) if Path(dns.store).exists() else None
-        if status != "complete":
-            return None, (f"no replay record {path} and no finished store {dns.store} "
-                          f"(status {status}) to make it from")
-        for key, spec in (("dns.policy", dns.policy), ("dns.trained", dns.trained)):
-            try:
-                if "/" in spec:  # a policy file (not a baseline such as naive(-0.5))
-                    resolve_policy_file(spec)
-            except (FileNotFoundError, ValueError) as err:
-                return None, f"no replay record {path}: {key}={spec!r} ({err})"
-        write_npz(make_record(cfg, dns), path)
-    out = read_npz(path)
-    made = {k[6:]: str(v) for k, v in out.items() if k.startswith("input_")}
-    differ = sorted(k for k, v in record_inputs(cfg, dns).items() if made.get(k) != v)
-    if differ:
-        return None, (f"{path} was made with other {', '.join(differ)} (delete it to remake it "
-                      "from the store)")
-    out["vorticity"] = out["vorticity"].astype(np.float32)
-    return out, ""
-
-
-# -- (c) the transfer ----------------------------------------------------------------------------
-def transfer_records(root: Path) -> list[Path]:
-    """The ``comparison.json`` files under ``root``, one per held-out realisation, in the
-    order every transfer reader uses."""
-    return sorted(Path(root).rglob(RunLayout(root).comparison.name))
-
-
-def read_transfer(root: Path) -> dict[str, np.ndarray]:
-    """Per-flow ``R_hat`` of each strategy label over every ``comparison.json`` under
-    ``root`` (one per held-out realisation), concatenated over realisations:
-    ``{label: (flows,)}``, plus ``realisation`` (the index of each flow's record)."""
-    per: dict[str, list[np.ndarray]] = {}
-    which: list[np.ndarray] = []
-    for i, path in enumerate(transfer_records(root)):
-        rec = json.loads(path.read_text())
-        for row in rec["rows"]:
-            per.setdefault(row["label"], []).append(np.asarray(row["per_flow"], dtype=float))
-        which.append(np.full(len(rec["rows"][0]["per_flow"]), i))
-    if not per:
-        return {}
-    sizes = {len(v) for v in per.values()}
-    if sizes != {len(which)}:
-        raise ValueError(f"{root}: the records do not all hold the same strategies")
-    out = {k: np.concatenate(v) for k, v in per.items()}
-    out["realisation"] = np.concatenate(which)
-    return out
-
-
-def _std(x: np.ndarray) -> float:
-    return float(np.std(x, ddof=1)) if np.size(x) > 1 else math.nan
-
-
-def realisation_ratios(num: np.ndarray, den: np.ndarray, real: np.ndarray) -> np.ndarray:
-    """``<num>_i / <den>_i`` for each realisation ``i`` (means over its flows, the same flows
-    for both)."""
-    return np.array([num[real == i].mean() / den[real == i].mean() for i in np.unique(real)])
-
-
-def transfer_summary(per: dict[str, np.ndarray], reference: str = "sto") -> dict[str, dict]:
-    """Per label: ``R_hat`` (mean and std over flows), the paired ratio of its mean to the
-    ``reference``'s over all flows with its delta-method SEM (``ratio``, ``ratio_sem``, as
-    ``swimrl-compare``), each realisation's own paired ratio and their std over
-    realisations (``ratio_realisation_std``: the bars of Fig. dnsFlow(c))."""
-    ref, real = per[reference], per["realisation"]
-    out = {}
-    for label, r in per.items():
-        if label == "realisation":
-            continue
-        ratio, sem = paired_ratio(r, ref)
-        by_real = realisation_ratios(r, ref, real)
-        out[label] = {"R_hat": float(r.mean()), "R_hat_std": _std(r),
-                      "ratio": ratio, "ratio_sem": sem,
-                      "ratio_realisations": by_real.tolist(),
-                      "ratio_realisation_std": _std(by_real),
-                      "n_flows": int(r.size), "n_realisations": int(len(by_real))}
-    return out
-
-
-def transfer_markdown(summary: dict[str, dict]) -> str:
-    """The transfer table: per strategy R_hat (mean and std over flows), the paired ratio to
-    STO over all flows (+- delta-method SEM), each realisation's ratio and their std."""
-    rows = []
-    for label, s in summary.items():
-        per = ", ".join(f"{r:.3f}" for r in s["ratio_realisations"])
-        rows.append([label, f"{s['R_hat']:.3f} ± {s['R_hat_std']:.3f}",
-                     f"{s['ratio']:.3f} ± {s['ratio_sem']:.3f}", per,
-                     f"{s['ratio_realisation_std']:.3f}"])
-    n = next(iter(summary.values()))
-    head = ["strategy", f"R̂ (mean ± std over {n['n_flows']} flows)",
-            "R̂ / R̂_STO (paired, ± SEM)",
-            f"per realisation ({n['n_realisations']})", "std over realisations"]
-    return markdown_table(head, rows)
-
-
-def trained_ratio(per: dict[str, np.ndarray], transferred: str,
-                  trained: Sequence[str]) -> dict:
-    """The transferred policy against the DNS-trained runs, realisation by realisation:
-    ``r_{k,i} = <R_hat_transferred>_i / <R_hat_trained_k>_i`` (means over the flows of
-    realisation ``i``, the same flows for both), per realisation the mean and std over the
-    runs ``k``, and per run its ratio over all flows."""
-    real = per["realisation"]
-    num = per[transferred]
-    runs = np.array([realisation_ratios(num, per[t], real) for t in trained])  # (runs, real.)
-    overall = [float(num.mean() / per[t].mean()) for t in trained]
-    return {"transferred": transferred, "trained": list(trained),
-            "per_realisation": runs.T.tolist(),
-            "realisation_mean": runs.mean(0).tolist(),
-            "realisation_std_over_runs": [_std(c) for c in runs.T],
-            "overall": overall, "overall_mean": float(np.mean(overall)),
-            "overall_std_over_runs": _std(np.asarray(overall))}
-
-
-def realisation_names(root: Path) -> list[str]:
-    """The held-out realisations of :func:`read_transfer` in its order: the directory of
-    each ``comparison.json`` under ``root``."""
-    return [p.parent.name for p in transfer_records(root)]
-
-
-def trained_ratio_markdown(r: dict, names: Sequence[str] | None = None) -> str:
-    """One row per held-out realisation (``names``, default 1, 2, ...): the ratio for each
-    DNS-trained run, mean and std over the runs; last row: all flows."""
-    head = ["held-out realisation", *[f"÷ {t}" for t in r["trained"]], "mean", "std over runs"]
-    names = list(names) if names else [str(i + 1) for i in range(len(r["per_realisation"]))]
-    rows = [[name, *[f"{v:.3f}" for v in per], f"{m:.3f}", f"{sd:.3f}"]
-            for name, per, m, sd in zip(names, r["per_realisation"], r["realisation_mean"],
-                                        r["realisation_std_over_runs"], strict=True)]
-    rows.append(["all flows", *[f"{v:.3f}" for v in r["overall"]], f"{r['overall_mean']:.3f}",
-                 f"{r['overall_std_over_runs']:.3f}"])
-    return (f"{r['transferred']} / DNS-trained run, per held-out realisation (ratio of the "
-            "mean R̂ over the same flows):\n\n" + markdown_table(head, rows))
-
-
-def replay_summary(rec: dict) -> dict[str, dict]:
-    """The replay record's strategies (:func:`replay_strategies`): ``R_hat`` (mean, SEM over
-    swimmers) and the mean distance from the start after ``T`` in box units (``R_hat`` times
-    the reference distance ``v_s T``)."""
-    names = replay_strategies(str(rec["input_policy"]), str(rec["input_trained"]))
-    ref = float(rec["reference_distance"])
-    out = {}
-    for name, r in zip(names, np.asarray(rec["R_hat"], dtype=float), strict=True):
-        out[name] = {"R_hat": float(r.mean()), "R_hat_sem": _std(r) / math.sqrt(r.size),
-                     "distance_L": float(r.mean() * ref), "n_swimmers": int(r.size)}
-    return out
-
-
-def replay_markdown(summary: dict[str, dict], store: str) -> str:
-    """The replay record's table (the numbers of videos 5, 10)."""
-    rows = [[k, f"{v['R_hat']:.3f} ± {v['R_hat_sem']:.3f}", f"{v['distance_L']:.2f}",
-             str(v["n_swimmers"])] for k, v in summary.items()]
-    return (f"Replay record (videos 5, 10; Fig. dnsFlow(a)): held-out run {store}, one start "
-            "time, the same initial conditions for every strategy; ± SEM over swimmers.\n\n"
-            + markdown_table(["strategy", "R̂", "mean distance after T / L", "swimmers"], rows))
 
 
 # -- the figure ----------------------------------------------------------------------------------
@@ -466,7 +215,7 @@ def _draw_transfer(ax, summary: dict[str, dict], dns_labels: tuple[str, ...]) ->
         ax.axhline(mean, color="k", ls=":", lw=1.5,
                    label=f"trained in the DNS ({len(trained)} runs)")
         if len(trained) > 1:
-            err = _std(np.asarray(trained))
+            err = sample_std(np.asarray(trained))
             ax.axhspan(mean - err, mean + err, color="0.88", zorder=0)
         lines["trained in the DNS"] = {"ratio": mean}
     for label, s in lines.items():

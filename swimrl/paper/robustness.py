@@ -15,16 +15,9 @@ import numpy as np
 
 from swimrl.analysis.plots import pyplot
 
-from .records import (
-    RECORD_STRATEGIES,
-    Evaluation,
-    FiguresConfig,
-    eval_setup,
-    figure_record,
-    per_flow_values,
-    record_sizes,
-    smart_policy,
-)
+from .evaluations import RECORD_STRATEGIES, Evaluation, eval_setup, per_flow_values, smart_policy
+from .records import figure_record, record_sizes
+from .settings import FiguresConfig
 from .style import COLORS, save, sizes_title
 
 #: The swept parameters of Fig. robustness: (field of EnvParams, field of FiguresConfig

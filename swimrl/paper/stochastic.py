@@ -22,23 +22,21 @@ from swimrl.policies.baselines import StrategyLabel
 from swimrl.runs.layout import RunLayout
 from swimrl.runs.spec import EvalSizes
 
-from .mechanism import extend_record
-from .records import (
+from .evaluations import (
     KUS,
     RECORD_STRATEGIES,
     Evaluation,
-    FiguresConfig,
     cache_inputs,
     cached,
     eval_setup,
-    figure_record,
     flow_summary,
     flow_vorticity,
     ku_evaluation,
     ku_record,
-    record_sizes,
     record_strategies,
 )
+from .records import extend_record, figure_record, record_sizes
+from .settings import FiguresConfig
 from .style import COLORS, save, sizes_title
 
 

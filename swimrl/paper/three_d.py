@@ -26,11 +26,11 @@ import numpy as np
 from swimrl.analysis.plots import pyplot
 from swimrl.analysis.training_curves import draw_curve
 from swimrl.flows.labels import ku_name, parse_ku_name
-from swimrl.physics.signals3d import SIGNAL_NAMES_3D
+from swimrl.physics.body3d import SIGNAL_NAMES_3D
 from swimrl.policies.baselines import StrategyLabel
 from swimrl.runs.curves import read_curves
 
-from .records import FiguresConfig
+from .settings import FiguresConfig
 from .style import COLORS, save
 
 #: ``<Lambda>`` of a map bin with fewer decisions is not drawn.

@@ -25,7 +25,7 @@ from swimrl.policies.baselines import StrategyLabel
 from swimrl.runs.curves import read_curves
 from swimrl.runs.layout import RunLayout
 
-from .records import FiguresConfig
+from .settings import FiguresConfig
 from .style import save, shown
 
 

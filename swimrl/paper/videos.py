@@ -11,8 +11,8 @@ r"""The paper's supplemental videos (MP4, Matplotlib + the ffmpeg of ``imageio-f
 Each video's last frame is also written as a PNG still (``stills``: committed in
 ``docs/figures/videos/``; the MP4s are not).
 
-Both take the arrays of :func:`swimrl.paper.records.ku_record` (or of the DNS
-replay record, :func:`swimrl.paper.dns.dns_record`) and return what they drew;
+Both take the arrays of :func:`swimrl.paper.evaluations.ku_record` (or of the DNS
+replay record, :func:`swimrl.paper.dns_replay.dns_record`) and return what they drew;
 ``flow`` is the Kubo number or a label (``"DNS"``), ``unit`` the length unit of the positions.
 :func:`build_videos` makes all ten.
 """
@@ -26,8 +26,9 @@ import numpy as np
 from swimrl.analysis.plots import pyplot
 from swimrl.flows.labels import ku_display, ku_name
 
-from .dns import dns_record, shipped_before_pending
-from .records import KUS, RECORD_STRATEGIES, FiguresConfig, ku_record
+from .dns_replay import dns_record, shipped_before_pending
+from .evaluations import KUS, RECORD_STRATEGIES, ku_record
+from .settings import FiguresConfig
 from .style import COLORS
 
 

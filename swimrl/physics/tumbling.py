@@ -16,7 +16,7 @@ $$
 \ell = |(\mathbb I - \boldsymbol n\boldsymbol n)\mathbb S\boldsymbol n| .
 $$
 
-In the body frame of :mod:`swimrl.physics.signals3d`
+In the body frame of :mod:`swimrl.physics.body3d`
 ($\boldsymbol p_2 = \boldsymbol n\times\boldsymbol p_1$),
 $\boldsymbol b = S_{np_1}\boldsymbol p_1 + S_{np_2}\boldsymbol p_2$ and
 $\boldsymbol a = \tfrac12(\omega_{p_2}\boldsymbol p_1 - \omega_{p_1}\boldsymbol p_2)$, so
@@ -32,8 +32,8 @@ In 2D, eq. (2): $|\dot{\boldsymbol n}| = |\tfrac12\omega + \Lambda S_{np}|$, so
 $\tau = -\omega S_{np}$, $\ell = |S_{np}|$ and $\Lambda^* = \mathrm{clip}(-\omega/(2S_{np}))$;
 in the plane the 3D quantities are these. Where the strain has no lever ($\ell = 0$) every
 $\Lambda$ gives the same rate and $\Lambda^* := 0$. Everything is read from a signal set,
-2D (:data:`~swimrl.physics.signals.SIGNAL_NAMES`) or 3D
-(:data:`~swimrl.physics.signals3d.SIGNAL_NAMES_3D`), named by the caller; strain and
+2D (:data:`~swimrl.physics.body2d.SIGNAL_NAMES`) or 3D
+(:data:`~swimrl.physics.body3d.SIGNAL_NAMES_3D`), named by the caller; strain and
 vorticity in units of $1/\tau_K$, so the rates are in $1/\tau_K$.
 """
 

@@ -1,17 +1,34 @@
 r"""Baseline strategies with the interface of a learned actor.
 
-Each is a :class:`tensordict.nn.TensorDictModule` reading ``signals`` (all five, in
-:data:`swimrl.physics.signals.SIGNAL_NAMES` order, ``S`` and ``omega`` in units of ``1/tau_K``) and
+Each is a :class:`tensordict.nn.TensorDictModule` reading ``signals`` (all of the body's: the
+five of :data:`swimrl.physics.body2d.SIGNAL_NAMES` in 2D, the seven of
+:data:`swimrl.physics.body3d.SIGNAL_NAMES_3D` in 3D, read from their width by
+:func:`~swimrl.physics.body.body_of_signals`; ``S`` and ``omega`` in units of ``1/tau_K``) and
 writing ``action`` (the shape factor ``Lambda``, shape ``(..., 1)``) within
 ``[-Lambda_max, Lambda_max]`` (``Lambda_max`` from the environment's action spec):
 
 * naive: ``Lambda = const`` (paper: ``0.98``);
-* STO (``eq:sto``): ``Lambda = -Lambda_max sign(n_theta) sign(S_np)``;
+* STO (``eq:sto``): ``Lambda = -Lambda_max sign(n_theta) sign(S_np)`` in 2D,
+  ``Lambda = Lambda_max sign(S_np1)`` in 3D (below);
 * minimal model (``eq:fit``):
   ``Lambda = Lambda_max tanh[-c1 n_theta sign(S_np) - c2 H(n_r) omega tau_K sign(S_np)
   + c3 n_r - c4 tanh(S_nn tau_K)]``, ``H`` the Heaviside step (``H(0) = 0``);
 * the optimised rule (:mod:`.optimised`): ``eq:fit`` in frame-invariant terms, 2D and 3D,
   with six coefficients optimised on ``R_hat``.
+
+**STO in 3D**, derived as ``eq:sto``: with ``r = |x - x_0|``, ``e_r = (x - x_0)/r``,
+``d(n.e_r)/dt = e_r.dn/dt + n.de_r/dt``, ``de_r/dt = (I - e_r e_r) dx/dt / r``, and
+``dx/dt = u + v_s n`` does not contain ``Lambda``, so neither does ``de_r/dt``; of
+``dn/dt = (omega x n)/2 + Lambda (I - n n) S n`` only the strain term does, and
+``e_r.(I - n n) S n = (e_r - (e_r.n) n).S n = sqrt(1 - n_r^2) p1.S n``:
+``d(n.e_r)/dt = Lambda sqrt(1 - n_r^2) S_np1 + (Lambda-independent terms)``. The same factor
+is the shape-dependent term of the distance (``eq:sto``'s expansion):
+``r(t + dt) = (v_s Lambda dt^2/2) sqrt(1 - n_r^2) S_np1 + ...``. Linear in ``Lambda`` with a
+coefficient of the sign of ``S_np1``, both are maximised over ``[-Lambda_max, Lambda_max]``
+by ``Lambda = Lambda_max sign(S_np1)``; where ``n`` is parallel to ``e_r`` (``n_r = +-1``) or
+``S_np1 = 0`` every ``Lambda`` is optimal (the rule gives ``Lambda_max`` or 0). In the plane
+(``p1 = -sign(n_theta) p``) this is the 2D rule. The sign ``sigma`` of each body's rule is
+:meth:`~swimrl.physics.body.Body.sto_sign`.
 """
 
 from __future__ import annotations
@@ -27,10 +44,10 @@ from torchrl.data import Bounded
 
 from swimrl.errors import ConfigError, as_float, one_of, require
 from swimrl.flows.labels import parse_ku_name
-from swimrl.physics.signals import SIGNAL_NAMES
-from swimrl.policies.baselines3d import ShortTimeOptimal3D
+from swimrl.physics.body import body, body_of_signals
+from swimrl.physics.body2d import SIGNAL_NAMES
 from swimrl.policies.networks import action_bounds
-from swimrl.policies.optimised import RULE_COEFFS, OptimisedRule, check_coefficients, signal_names
+from swimrl.policies.optimised import RULE_COEFFS, OptimisedRule, check_coefficients
 
 N_R, N_THETA, S_NN, S_NP, OMEGA = range(len(SIGNAL_NAMES))  # positions in SIGNAL_NAMES
 STRATEGIES = ("naive", "sto", "minimal", "optimised", "policy")
@@ -56,12 +73,13 @@ class NaiveShape(nn.Module):
 
 
 class ShortTimeOptimal(nn.Module):
-    """Short-time optimisation (the paper's eq. 10, ``eq:sto``):
-    ``Lambda = -Lambda_max sign(n_theta) sign(S_np)``, read from the ``signals`` key; with
-    ``amplitudes = (a_+, a_-)`` the energy-aware family: the same sign choice
-    ``sigma = -sign(n_theta) sign(S_np)`` with the prolate amplitude ``a_+`` where ``sigma > 0``
-    and the oblate ``-a_-`` where ``sigma < 0`` (0 where ``sigma = 0``); ``a_+ = a_- = a``
-    is STO at ``Lambda_max = a``.
+    """Short-time optimisation (the paper's eq. 10, ``eq:sto``): ``Lambda = Lambda_max sigma``
+    with the body's sign ``sigma`` (:meth:`~swimrl.physics.body.Body.sto_sign`:
+    ``-sign(n_theta) sign(S_np)`` in 2D, ``sign(S_np1)`` in 3D; the body read from the width
+    of the ``signals`` key); with ``amplitudes = (a_+, a_-)`` the energy-aware family: the same
+    sign choice with the prolate amplitude ``a_+`` where ``sigma > 0`` and the oblate ``-a_-``
+    where ``sigma < 0`` (0 where ``sigma = 0``); ``a_+ = a_- = a`` is STO at
+    ``Lambda_max = a``.
 
     Parameters
     ----------
@@ -78,16 +96,20 @@ class ShortTimeOptimal(nn.Module):
         self.amplitudes = None if amplitudes is None else tuple(float(a) for a in amplitudes)
 
     def forward(self, signals: torch.Tensor) -> torch.Tensor:
-        s = torch.sign(signals[..., N_THETA]) * torch.sign(signals[..., S_NP])
+        sigma = body_of_signals(signals).sto_sign(signals)
         if self.amplitudes is None:
-            return (-self.shape_factor_max * s).unsqueeze(-1)
+            return (self.shape_factor_max * sigma).unsqueeze(-1)
         prolate, oblate = self.amplitudes
-        lam = torch.where(s < 0, prolate, torch.where(s > 0, -oblate, 0.0))
+        lam = torch.where(sigma > 0, prolate, torch.where(sigma < 0, -oblate, 0.0))
         return lam.to(signals.dtype).unsqueeze(-1)
 
 
 def minimal_model(signals: torch.Tensor, coeffs: Sequence[float] | torch.Tensor, lam_max: float):
-    """``eq:fit`` evaluated on ``signals`` ``(..., 5)``; returns ``Lambda`` ``(...)``."""
+    """``eq:fit`` evaluated on ``signals`` ``(..., 5)``, the 2D set (ValueError for any
+    other); returns ``Lambda`` ``(...)``."""
+    if body_of_signals(signals).signal_names != SIGNAL_NAMES:
+        raise ValueError(f"the minimal model reads the 2D signals {list(SIGNAL_NAMES)}; it was "
+                         f"given {signals.shape[-1]} columns (use strategy=optimised in 3D)")
     c1, c2, c3, c4 = (coeffs[i] for i in range(4))
     n_r, n_th = signals[..., N_R], signals[..., N_THETA]
     s_nn, s_np, om = signals[..., S_NN], signals[..., S_NP], signals[..., OMEGA]
@@ -174,11 +196,13 @@ class StrategySpec:
             object.__setattr__(self, "amplitudes", tuple(float(a) for a in pair))
 
     def check_dimension(self, dim: int) -> None:
-        """``strategy=minimal`` reads ``n_theta`` and ``S_np``, 2D signals: refused in 3D."""
-        if dim == 3 and self.name == "minimal":
-            raise ConfigError(f"strategy={self.name} is invalid with a 3D flow: allowed naive, "
-                              "sto, optimised or policy (the minimal model reads the 2D "
-                              "signals n_theta and S_np)")
+        """``strategy=minimal`` reads ``n_theta`` and ``S_np``: refused for a body (of a
+        ``dim``-dimensional flow) without them."""
+        names = body(dim).signal_names
+        if self.name == "minimal" and not {"n_theta", "S_np"} <= set(names):
+            raise ConfigError(f"strategy={self.name} is invalid with a {dim}D flow: allowed "
+                              "naive, sto, optimised or policy (the minimal model reads the 2D "
+                              f"signals n_theta and S_np; the flow gives {list(names)})")
 
     def check_bound(self, shape_factor_max: float) -> None:
         """A naive shape factor (STO's amplitudes) must lie within ``[-Lambda_max,
@@ -196,11 +220,12 @@ class StrategySpec:
             )
 
 
-def build_strategy(spec: StrategySpec, action_spec: Bounded, dim: int = 2
-                   ) -> TensorDictModule:
+def build_strategy(spec: StrategySpec, action_spec: Bounded) -> TensorDictModule:
     """Baseline actor for ``spec``; ``Lambda_max`` is the upper bound of the environment's
-    (unbatched) action spec; ``dim = 3``: STO on the 3D signals
-    (:class:`~swimrl.policies.baselines3d.ShortTimeOptimal3D`).
+    (unbatched) action spec. The actor reads the body from the width of the ``signals`` it
+    is given (:func:`~swimrl.physics.body.body_of_signals`): the same actor is the 2D STO on
+    2D signals and the 3D STO on 3D signals; the minimal model refuses 3D signals with one
+    error.
 
     Parameters
     ----------
@@ -209,8 +234,6 @@ def build_strategy(spec: StrategySpec, action_spec: Bounded, dim: int = 2
         :func:`~swimrl.runs.policy_files.load_policy`).
     action_spec
         The environment's ``action_spec_unbatched``.
-    dim
-        The environment's dimension (``env.dim``).
 
     Returns
     -------
@@ -220,15 +243,12 @@ def build_strategy(spec: StrategySpec, action_spec: Bounded, dim: int = 2
     lam_max = action_bounds(action_spec)[1]
     if spec.name == "naive":
         return as_actor(NaiveShape(spec.shape_factor))
-    spec.check_dimension(dim)
     if spec.name == "sto":
-        if dim == 3:
-            return as_actor(ShortTimeOptimal3D(lam_max, spec.amplitudes))
         return as_actor(ShortTimeOptimal(lam_max, spec.amplitudes))
     if spec.name == "minimal":
         return as_actor(MinimalModel(spec.coeffs, lam_max))
     if spec.name == "optimised":
-        return as_actor(OptimisedRule(spec.coeffs, lam_max, signal_names(dim)))
+        return as_actor(OptimisedRule(spec.coeffs, lam_max))
     raise ValueError(f"strategy {spec.name!r} is not a baseline (load a policy file instead)")
 
 

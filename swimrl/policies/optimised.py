@@ -1,7 +1,7 @@
 r"""The optimised hand-coded rule (``strategy=optimised``): the paper's minimal model
 (``eq:fit``) written in frame-invariant terms, so that one formula reads the 2D signals
-(:data:`~swimrl.physics.signals.SIGNAL_NAMES`) and the 3D ones
-(:data:`~swimrl.physics.signals3d.SIGNAL_NAMES_3D`), with a gate in ``n_r`` on its
+(:data:`~swimrl.physics.body2d.SIGNAL_NAMES`) and the 3D ones
+(:data:`~swimrl.physics.body3d.SIGNAL_NAMES_3D`), with a gate in ``n_r`` on its
 stabilising term and six coefficients optimised directly on ``R_hat``
 (``docs/results/optimised_rules/``; derivation: ``docs/physics.md``, "Optimised rules"):
 
@@ -15,7 +15,7 @@ stabilising term and six coefficients optimised directly on ``R_hat``
 (:func:`rule_terms`):
 
 * STO: ``sqrt(1 - n_r^2) sign(S_np1)`` (the sign of STO in 3D,
-  :func:`~swimrl.policies.baselines3d.short_time_optimal_3d`, times the lever
+  :meth:`~swimrl.physics.body3d.Body3D.sto_sign`, times the lever
   ``|e_r.(I - n n)|``); in 2D ``-n_theta sign(S_np)``;
 * stabilisation: ``n.(omega x S n) / |(I - n n) S n| = 2 |(I - n n) S n| Lambda*``,
   ``Lambda* = n.(omega x S n) / (2 |(I - n n) S n|^2)`` the shape that minimises the
@@ -45,8 +45,9 @@ import torch
 from torch import nn
 
 from swimrl.errors import ConfigError
-from swimrl.physics.signals import SIGNAL_NAMES
-from swimrl.physics.signals3d import SIGNAL_NAMES_3D
+from swimrl.physics.body import body, body_of_signals
+from swimrl.physics.body2d import SIGNAL_NAMES
+from swimrl.physics.body3d import SIGNAL_NAMES_3D
 
 RULE_COEFFS: tuple[str, ...] = ("c1", "c2", "c3", "c4", "n0", "w")
 """The rule's coefficients, in this order (the keys of ``conf/strategy/optimised.yaml``)."""
@@ -61,8 +62,8 @@ class RulePreset:
     coeffs
         ``(c1, c2, c3, c4, n0, w)``.
     signals
-        The signal set they were optimised on: :data:`~swimrl.physics.signals.SIGNAL_NAMES`
-        (2D) or :data:`~swimrl.physics.signals3d.SIGNAL_NAMES_3D` (3D).
+        The signal set they were optimised on: :data:`~swimrl.physics.body2d.SIGNAL_NAMES`
+        (2D) or :data:`~swimrl.physics.body3d.SIGNAL_NAMES_3D` (3D).
     kubo
         The Kubo number of the training flows.
     record
@@ -84,6 +85,9 @@ PRESETS: dict[str, RulePreset] = {
     "ku10_2d": RulePreset((1.957885931670428, 2.543642200661529, 1.5465418568375635,
                            1.7311190372714176, 0.26693241305068005, 0.34483952083513186),
                           SIGNAL_NAMES, 10.0, "docs/results/optimised_rules/ku10_2d/"),
+    "ku1_2d": RulePreset((7.5724811102585, 4.611025610298027, 1.5882504649043008,
+                          1.8246431688462144, 0.3690329559243528, 0.2152682491848516),
+                         SIGNAL_NAMES, 1.0, "docs/results/optimised_rules/ku1_2d/"),
     "ku10_3d": RulePreset((2.352338417553584, 3.6574809363428997, 1.7175204244005036,
                            1.2108340854928188, 0.478987136349457, 0.08913951685922156),
                           SIGNAL_NAMES_3D, 10.0, "docs/results/optimised_rules/ku10_3d/"),
@@ -94,44 +98,27 @@ record under ``docs/results/optimised_rules/``."""
 
 
 def signal_dimension(names: Sequence[str]) -> int:
-    """2 for :data:`~swimrl.physics.signals.SIGNAL_NAMES`, 3 for
-    :data:`~swimrl.physics.signals3d.SIGNAL_NAMES_3D`; ConfigError for any other set."""
-    names = tuple(names)
-    if names == SIGNAL_NAMES:
-        return 2
-    if names == SIGNAL_NAMES_3D:
-        return 3
-    raise ConfigError(f"the optimised rule reads all the signals of a flow, {list(SIGNAL_NAMES)} "
-                      f"(2D) or {list(SIGNAL_NAMES_3D)} (3D), not {list(names)}")
+    """The dimension of the body whose full signal set is ``names``
+    (:func:`~swimrl.physics.body.body_of_signals`); ConfigError for any other set."""
+    try:
+        return body_of_signals(names).dim
+    except ValueError as err:
+        raise ConfigError(f"the optimised rule reads all the signals of a flow: {err}") from None
 
 
-def signal_names(dim: int) -> tuple[str, ...]:
-    """The full signal set of a ``dim``-dimensional flow."""
-    return SIGNAL_NAMES_3D if dim == 3 else SIGNAL_NAMES
-
-
-def rule_terms(signals: torch.Tensor, names: Sequence[str]
+def rule_terms(signals: torch.Tensor, names: Sequence[str] | None = None
                ) -> tuple[torch.Tensor, torch.Tensor, torch.Tensor, torch.Tensor]:
     r"""The rule's four frame-invariant terms ``(n_r, STO, stabilisation, S_nn)`` of
-    ``signals`` ``(..., len(names))``, whose columns are ``names`` (the 2D or the 3D set);
-    each ``(...)``. 2D: ``(n_r, -n_theta sign S_np, -omega sign S_np, S_nn)``; 3D:
+    ``signals`` ``(..., k)``, the full signal set of a body (named ``names``, or read from
+    the width ``k``): :meth:`~swimrl.physics.body.Body.invariant_terms`, each ``(...)``. 2D:
+    ``(n_r, -n_theta sign S_np, -omega sign S_np, S_nn)``; 3D:
     ``(n_r, sqrt(1 - n_r^2) sign S_np1, (S_np2 omega_p1 - S_np1 omega_p2) / |(I - nn)Sn|,
     S_nn)``."""
-    dim = signal_dimension(names)
-    if signals.shape[-1] != len(names):
-        raise ValueError(f"signals have {signals.shape[-1]} columns, the {dim}D rule reads "
-                         f"{len(names)}: {list(names)}")
-    col = {name: signals[..., i] for i, name in enumerate(names)}
-    n_r, s_nn = col["n_r"], col["S_nn"]
-    if dim == 2:
-        sgn = torch.sign(col["S_np"])
-        return n_r, -col["n_theta"] * sgn, -col["omega"] * sgn, s_nn
-    s1, s2 = col["S_np1"], col["S_np2"]
-    lever = torch.sqrt(s1 * s1 + s2 * s2)
-    torque = s2 * col["omega_p1"] - s1 * col["omega_p2"]  # n.(omega x S n)
-    stab = torch.where(lever > 0, torque / torch.where(lever > 0, lever, 1.0), 0.0)
-    sto = torch.sqrt(torch.clamp(1 - n_r * n_r, min=0.0)) * torch.sign(s1)
-    return n_r, sto, stab, s_nn
+    body_ = body_of_signals(signals if names is None else names)
+    if signals.shape[-1] != len(body_.signal_names):
+        raise ValueError(f"signals have {signals.shape[-1]} columns, the {body_.dim}D rule "
+                         f"reads {len(body_.signal_names)}: {list(body_.signal_names)}")
+    return body_.invariant_terms(signals)
 
 
 def _coefficient(coeffs, i: int, like: torch.Tensor):
@@ -140,7 +127,7 @@ def _coefficient(coeffs, i: int, like: torch.Tensor):
 
 
 def rule_argument(signals: torch.Tensor, coeffs: Sequence[float] | torch.Tensor,
-                  names: Sequence[str]) -> torch.Tensor:
+                  names: Sequence[str] | None = None) -> torch.Tensor:
     """``z`` of the module docstring (``Lambda = Lambda_max clip(z, -1, 1)``), ``(...)``.
 
     Parameters
@@ -152,8 +139,8 @@ def rule_argument(signals: torch.Tensor, coeffs: Sequence[float] | torch.Tensor,
         against ``signals[..., 0]`` (one rule per swimmer block, as the optimiser evaluates
         a population). ``c1 = inf`` is allowed (STO's sign wherever its lever is not 0).
     names
-        The signals' names (:data:`~swimrl.physics.signals.SIGNAL_NAMES` or
-        :data:`~swimrl.physics.signals3d.SIGNAL_NAMES_3D`).
+        The signals' names (:data:`~swimrl.physics.body2d.SIGNAL_NAMES` or
+        :data:`~swimrl.physics.body3d.SIGNAL_NAMES_3D`; None: read from the width).
     """
     n_r, sto, stab, s_nn = rule_terms(signals, names)
     c1, c2, c3, c4, n0, w = (_coefficient(coeffs, i, n_r) for i in range(len(RULE_COEFFS)))
@@ -164,7 +151,7 @@ def rule_argument(signals: torch.Tensor, coeffs: Sequence[float] | torch.Tensor,
 
 
 def optimised_rule(signals: torch.Tensor, coeffs: Sequence[float] | torch.Tensor,
-                   lam_max: float, names: Sequence[str]) -> torch.Tensor:
+                   lam_max: float, names: Sequence[str] | None = None) -> torch.Tensor:
     """``Lambda = lam_max clip(z, -1, 1)`` (:func:`rule_argument`), ``(...)``."""
     return lam_max * torch.clamp(rule_argument(signals, coeffs, names), -1.0, 1.0)
 
@@ -193,7 +180,8 @@ def preset_coefficients(name: str, dim: int, key: str = "strategy.preset") -> tu
         fits = sorted(k for k, v in PRESETS.items() if v.dim == dim)
         raise ConfigError(
             f"{key}={name} is invalid with a {dim}D flow: {name} is a {p.dim}D rule, optimised "
-            f"on the signals {list(p.signals)}, and the flow gives {list(signal_names(dim))}; "
+            f"on the signals {list(p.signals)}, and the flow gives "
+            f"{list(body(dim).signal_names)}; "
             f"allowed the {dim}D presets {fits}")
     return p.coeffs
 
@@ -231,17 +219,19 @@ class OptimisedRule(nn.Module):
     shape_factor_max
         ``Lambda_max``.
     names
-        The names of the ``signals`` columns it reads: the environment's full set, 2D or 3D.
+        The names of the ``signals`` columns it reads: the environment's full set, 2D or 3D
+        (None: the body whose set has the width of the signals it is given).
     """
 
     def __init__(self, coeffs: Sequence[float], shape_factor_max: float,
-                 names: Sequence[str]):
+                 names: Sequence[str] | None = None):
         super().__init__()
         self.register_buffer("coeffs", torch.tensor(check_coefficients(coeffs),
                                                     dtype=torch.float64))
         self.shape_factor_max = float(shape_factor_max)
-        signal_dimension(names)
-        self.names = tuple(names)
+        if names is not None:
+            signal_dimension(names)
+        self.names = None if names is None else tuple(names)
 
     def forward(self, signals: torch.Tensor) -> torch.Tensor:
         c = self.coeffs.to(signals.dtype)

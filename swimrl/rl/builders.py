@@ -29,7 +29,7 @@ from torchrl.objectives import ClipPPOLoss
 from torchrl.objectives.value import GAE
 from torchrl.record.loggers.tensorboard import TensorboardLogger
 
-from swimrl.env import EnvParams, SwimmerEnv
+from swimrl.env import EnvParams, SwimmerEnv, build_env
 from swimrl.flows.build import FlowSpec
 from swimrl.policies.networks import ModelSpec, actor_critic
 from swimrl.rl.plan import LossSettings, TrainConfig, TrainPlan, TrainSettings
@@ -56,8 +56,8 @@ def make_env(flow: FlowSpec, params: EnvParams, runtime: Runtime, train: TrainSe
     ``seed`` (the training stream, :func:`~swimrl.rl.plan.training_seed`), episodes staggered
     in ``train.stagger`` groups (:meth:`~swimrl.env.SwimmerEnv.stagger`), with the reward
     multiplied by ``train.reward_scale`` (None: :func:`auto_reward_scale` at ``loss.gamma``)."""
-    base = SwimmerEnv.build(flow, params, runtime, train.n_flows, train.n_swimmers, seed,
-                            stagger=train.stagger)
+    base = build_env(flow, params, runtime, train.n_flows, train.n_swimmers, seed,
+                     stagger=train.stagger)
     scale = train.reward_scale
     if scale is None:
         scale = auto_reward_scale(base, loss.gamma)

@@ -34,8 +34,8 @@ from tensordict.nn import TensorDictModule
 from swimrl.env import EnvParams
 from swimrl.errors import BadFileError, ConfigError
 from swimrl.flows.labels import parse_ku_name
-from swimrl.physics.signals import SIGNAL_NAMES
-from swimrl.physics.signals3d import SIGNAL_NAMES_3D
+from swimrl.physics.body2d import SIGNAL_NAMES
+from swimrl.physics.body3d import SIGNAL_NAMES_3D
 from swimrl.policies.networks import (
     NO_STD_BOUND,
     ModelSpec,

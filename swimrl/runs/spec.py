@@ -12,8 +12,7 @@ from swimrl.env import EnvParams
 from swimrl.errors import ConfigError, as_bool, as_int, keep_number_types, one_of, require
 from swimrl.flows.build import FlowSpec
 from swimrl.flows.registry import flow_dimension, flow_entry
-from swimrl.physics.signals import SHAPE_SIGNAL, SIGNAL_NAMES, signal_indices
-from swimrl.physics.signals3d import SIGNAL_NAMES_3D
+from swimrl.physics.body import body, observable_names, signal_indices
 from swimrl.runtime import Runtime
 
 
@@ -60,7 +59,7 @@ class RunSpec:
     Parameters
     ----------
     flow
-        The flow (:class:`~swimrl.flows.build.StochasticSpec`, a stored or live DNS spec).
+        The flow (:class:`~swimrl.flows.stochastic.StochasticSpec`, a stored or live DNS spec).
     params
         Swimmer, episode, signals, task and reward (:class:`~swimrl.env.EnvParams`).
     runtime
@@ -83,9 +82,9 @@ class RunSpec:
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "seed", as_int("seed", self.seed, low=0))
-        names = SIGNAL_NAMES_3D if self.dimension == 3 else SIGNAL_NAMES
+        names = observable_names(body(self.dimension))
         try:
-            signal_indices(self.params.signals, names + (SHAPE_SIGNAL,))
+            signal_indices(self.params.signals, names)
         except ConfigError as err:
             raise ConfigError(f"{err} (flow={self.flow.name} is {self.dimension}D)") from None
         kernels = flow_entry(self.flow.name).kernels

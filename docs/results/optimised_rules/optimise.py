@@ -36,12 +36,12 @@ from hydra import compose, initialize_config_module
 from scipy.optimize import differential_evolution, minimize
 
 from swimrl.config import eval_setup
-from swimrl.env import SwimmerEnv
+from swimrl.env import build_env
 from swimrl.evaluation.rollout import chunk_seed, run_episodes
 from swimrl.evaluation.statistics import paired_ratio
+from swimrl.physics.body import body
 from swimrl.policies.baselines import ShortTimeOptimal
-from swimrl.policies.baselines3d import ShortTimeOptimal3D
-from swimrl.policies.optimised import RULE_COEFFS, check_coefficients, optimised_rule, signal_names
+from swimrl.policies.optimised import RULE_COEFFS, check_coefficients, optimised_rule
 from swimrl.runs.records import write_json
 
 ROOT = Path(__file__).resolve().parents[3]
@@ -72,12 +72,12 @@ class Population(torch.nn.Module):
 
     def __init__(self, rows: list, n_flows: int, n_swimmers: int, dim: int, lam_max: float):
         super().__init__()
-        self.names = signal_names(dim)
+        self.names = body(dim).signal_names
         self.sto_rows = [k for k, r in enumerate(rows) if r == "sto"]
         coeffs = [[0.0] * len(RULE_COEFFS) if r == "sto" else list(r) for r in rows]
         self.coeffs = torch.tensor(coeffs, dtype=torch.float64)
         self.f, self.s, self.lam_max = n_flows, n_swimmers, lam_max
-        self.sto = (ShortTimeOptimal3D if dim == 3 else ShortTimeOptimal)(lam_max)
+        self.sto = ShortTimeOptimal(lam_max)
 
     def forward(self, td):
         sig = td.get("signals")
@@ -97,8 +97,8 @@ def simulate(setup, dim: int, rows: list, n_flows: int, n_swimmers: int, seed: i
     lam_max = setup.params.shape_factor_max
     for c, start in enumerate(range(0, n_flows, per_chunk)):
         f = min(per_chunk, n_flows - start)
-        env = SwimmerEnv.build(setup.flow, setup.params, setup.runtime, f,
-                               len(rows) * n_swimmers, chunk_seed(seed, c), ic_blocks=len(rows))
+        env = build_env(setup.flow, setup.params, setup.runtime, f,
+                        len(rows) * n_swimmers, chunk_seed(seed, c), ic_blocks=len(rows))
         r = run_episodes(env, Population(rows, f, n_swimmers, dim, lam_max)).double()
         env.check_displacement()
         r = r.reshape(f, len(rows), n_swimmers).mean(-1)
@@ -297,7 +297,7 @@ def validate(args) -> None:
     write_json(rec, out / "validation.json")
     best = max(table[1:], key=lambda t: t["R_hat"])
     write_json({"coefficients": dict(zip(RULE_COEFFS, best["x"], strict=True)),
-                "signals": list(signal_names(s["dim"])), "dim": s["dim"], "kubo": s["kubo"],
+                "signals": list(body(s["dim"]).signal_names), "dim": s["dim"], "kubo": s["kubo"],
                 "chosen_on": f"validation seed {args.seed}, {args.flows} x {args.swimmers}",
                 "validation_ratio_to_sto": [best["ratio_to_sto"], best["ratio_sem"]],
                 "train_R_hat": best["train_R_hat"], "label": best["label"]},

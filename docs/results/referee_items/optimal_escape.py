@@ -42,7 +42,7 @@ from pathlib import Path
 import numpy as np
 import torch
 
-from swimrl import EnvParams, Runtime, StochasticSpec, SwimmerEnv
+from swimrl import EnvParams, Runtime, StochasticSpec, build_env
 from swimrl.flows.labels import ku_name
 
 LAMBDAS = (-0.98, -0.5, 0.0, 0.5, 0.98)
@@ -61,9 +61,9 @@ def run(kubo: float, flows: int, starts: int, orientations: int, duration: float
     params = EnvParams(duration=duration)
     n_lam = len(LAMBDAS)
     per_flow = n_lam * starts * orientations
-    env = SwimmerEnv.build(StochasticSpec(kubo=kubo), params,
-                           Runtime.from_names("cpu", "float32", threads), flows, per_flow,
-                           seed=seed)
+    env = build_env(StochasticSpec(kubo=kubo), params,
+                    Runtime.from_names("cpu", "float32", threads), flows, per_flow,
+                    seed=seed)
     td = env.reset()
     sig0 = env.signals()
     eulerian = float(vortex_dominated(sig0).float().mean())

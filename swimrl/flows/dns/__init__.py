@@ -15,8 +15,10 @@ Modules (FourierFlows.jl style): :mod:`.grid` (rfft2 wavenumbers, 2/3 mask), :mo
 :mod:`.diagnostics`, :mod:`.spinup` (spin-up and measured scales), :mod:`.store` (zarr layout and
 writer), :mod:`.integrity` (chunk checksums, checked reads, the per-snapshot finite / rms
 checks), :mod:`.verify` (a whole store checked, ``swimrl-dns-verify``), :mod:`.run` (the run
-behind ``swimrl-dns``). The reader of a stored run is
-:class:`swimrl.flows.sources.DNSStore`. See ``docs/dns.md``.
+behind ``swimrl-dns``), :mod:`.sources` (the snapshot sources of the replay: a stored run
+:class:`~swimrl.flows.dns.sources.DNSStore`, several runs, a live DNS), :mod:`.flow`
+(``flow=dns_replay`` and ``flow=dns``: their specs, builders and registry entries). See
+``docs/dns.md``.
 """
 
 from swimrl.flows.dns.forcing import SteadyForcing, StochasticForcing

@@ -12,7 +12,7 @@ u_\mathrm{rms} = \langle\boldsymbol u\cdot\boldsymbol u\rangle^{1/2} = \langle 2
 $$
 
 (2D: $\langle\partial_i u_j\,\partial_i u_j\rangle = \langle\omega^2\rangle$). ``swimrl-dns``
-(:mod:`swimrl.flows.dns.run`) and the live DNS flow (:class:`swimrl.flows.sources.LiveDNS`)
+(:mod:`swimrl.flows.dns.run`) and the live DNS flow (:class:`swimrl.flows.dns.sources.LiveDNS`)
 use the same schedule and meter.
 """
 

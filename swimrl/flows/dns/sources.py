@@ -25,6 +25,8 @@ swimmers' parameters are expressed.
   episode starts at the run's newest snapshot, the realisation keeping on evolving (it is
   statistically stationary after the spin-up). Nothing is written to disk. Best on a GPU
   (``device=cuda``).
+
+The flows replaying them, their specs and entries: :mod:`swimrl.flows.dns.flow`.
 """
 
 from __future__ import annotations
@@ -39,7 +41,6 @@ import torch
 import zarr
 
 from swimrl.flows.base import CHANNELS
-from swimrl.flows.dns import DNS, DNSParams, flow_channels
 from swimrl.flows.dns.grid import SpectralGrid, dealias_cutoff
 from swimrl.flows.dns.integrity import (
     SnapshotCheck,
@@ -48,7 +49,10 @@ from swimrl.flows.dns.integrity import (
     read_snapshots,
     verify_hint,
 )
+from swimrl.flows.dns.params import DNSParams
 from swimrl.flows.dns.spinup import SpinupSchedule, spin_up
+from swimrl.flows.dns.state import flow_channels
+from swimrl.flows.dns.stepper import DNS
 from swimrl.flows.dns.store import unpack
 
 log = logging.getLogger(__name__)
