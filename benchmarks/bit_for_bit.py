@@ -148,27 +148,33 @@ def check_resume(base: Path, work: Path) -> list[str]:
     return failures
 
 
-def check_figures(only: str | None, work: Path) -> list[str]:
-    """``swimrl-figures`` on a fresh clone of HEAD; ``git status`` must stay clean."""
+def check_figures(only: list[str] | None, work: Path) -> list[str]:
+    """``swimrl-figures`` (each of ``only``, or all) on a fresh clone of HEAD; ``git status``
+    must stay clean."""
     clone = work / "clone"
     subprocess.run(["git", "clone", "-q", str(ROOT), str(clone)], check=True)
-    cmd = [sys.executable, "-m", "swimrl.cli.figures", "threads=1",
-           f"hydra.run.dir={work / 'figures_run'}", *([f"only={only}"] if only else [])]
-    p = run(cmd, clone)
-    if p.returncode:
-        return [f"swimrl-figures failed: {p.stderr[-1500:]}"]
-    status = subprocess.run(["git", "status", "--porcelain"], cwd=clone, capture_output=True,
-                            text=True, check=True).stdout.strip()
-    print(f"  figures{'' if only is None else ' only=' + only}: "
-          f"{status or 'git status clean'}", flush=True)
-    return [f"git status after swimrl-figures:\n{status}"] if status else []
+    for name in only or [None]:
+        cmd = [sys.executable, "-m", "swimrl.cli.figures", "threads=1",
+               f"hydra.run.dir={work / 'figures_run' / str(name)}",
+               *([f"only={name}"] if name else [])]
+        p = run(cmd, clone)
+        if p.returncode:
+            return [f"swimrl-figures only={name} failed: {p.stderr[-1500:]}"]
+        status = subprocess.run(["git", "status", "--porcelain"], cwd=clone,
+                                capture_output=True, text=True, check=True).stdout.strip()
+        print(f"  figures{'' if name is None else ' only=' + name}: "
+              f"{status or 'git status clean'}", flush=True)
+        if status:
+            return [f"git status after swimrl-figures only={name}:\n{status}"]
+    return []
 
 
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--base", required=True, help="the commit compared against")
     ap.add_argument("--tiny", action="store_true", help="three cases, tiny sizes, one figure")
-    ap.add_argument("--only", default=None, help="swimrl-figures only=<figure> (default: all)")
+    ap.add_argument("--only", nargs="*", default=None,
+                    help="swimrl-figures only=<figure>, each in turn (default: all at once)")
     ap.add_argument("--skip", nargs="*", default=[], choices=["figures", "evaluations",
                                                                 "resume"])
     args = ap.parse_args(argv)
@@ -176,7 +182,7 @@ def main(argv: list[str] | None = None) -> int:
         names = TINY
         sizes = ["eval.n_flows=2", "eval.n_swimmers=4", "eval.record=2",
                  "episode.duration=1.0", "flow.n_grid=64", "flow.spacing=0.1"]
-        only = args.only or "threeDKu"
+        only = args.only or ["threeDKu"]
     else:
         names = [n for n, _ in CASES]
         sizes = ["eval.n_flows=2", "eval.n_swimmers=16", "eval.record=4",

@@ -91,6 +91,9 @@ PRESETS: dict[str, RulePreset] = {
     "ku10_3d": RulePreset((2.352338417553584, 3.6574809363428997, 1.7175204244005036,
                            1.2108340854928188, 0.478987136349457, 0.08913951685922156),
                           SIGNAL_NAMES_3D, 10.0, "docs/results/optimised_rules/ku10_3d/"),
+    "ku1_3d": RulePreset((3.670462444410366, 3.996877707974643, 0.7976094355148003,
+                          1.3287436236068282, 0.0319777338641436, 0.384778387505669),
+                         SIGNAL_NAMES_3D, 1.0, "docs/results/optimised_rules/ku1_3d/"),
 }
 """The shipped coefficients, by regime: ``strategy=optimised strategy.preset=NAME``,
 ``compare.optimised_presets=[NAME]``; each names the signals it was optimised on and its
