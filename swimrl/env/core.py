@@ -199,6 +199,10 @@ class SwimmerEnv(EnvBase):
         orientation."""
         return self.pos, self.image, self.orientation
 
+    def start_box(self) -> float:
+        """The side ``L`` of the cube ``[0, L)^d`` the swimmers start in: the grid's period."""
+        return self.flow.grid.length
+
     def length_resolution(self) -> float:
         """The flow's smallest resolved length (the grid spacing), for float tolerances."""
         return self.flow.grid.spacing
@@ -356,13 +360,12 @@ class SwimmerEnv(EnvBase):
         return self._observe()
 
     def _draw_starts(self, n: int) -> tuple[torch.Tensor, torch.Tensor, torch.Tensor | None]:
-        """``n`` new swimmers: positions uniform in the box ``[0, L)^d``, orientations
+        """``n`` new swimmers: positions uniform in ``[0, L)^d`` (:meth:`start_box`), orientations
         uniform (:meth:`~swimrl.physics.body.Body.draw_orientations`) and (``task=target``)
         targets ``X - x_0 = D e``, ``e`` a uniform direction, drawn in this order from the
         environment's generator."""
         g, dev, dt = self.generator, self.device, self.pos.dtype
-        length = self.flow.grid.length
-        new_pos = torch.rand(n, self.dim, generator=g, device=dev, dtype=dt) * length
+        new_pos = torch.rand(n, self.dim, generator=g, device=dev, dtype=dt) * self.start_box()
         new_orient = self.body.draw_orientations(n, g, dev, dt)
         target = None
         if self.task.target:

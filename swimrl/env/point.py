@@ -86,18 +86,9 @@ class PointSwimmerEnv(SwimmerEnv):
     def _wrap(self) -> None:
         """Nothing: the flow is unbounded."""
 
-    def _draw_starts(self, n: int) -> tuple[torch.Tensor, torch.Tensor, torch.Tensor | None]:
-        """Positions uniform in ``[0, start_box)^d``; orientations uniform
-        (:meth:`~swimrl.physics.body.Body.draw_orientations`); targets at distance ``D`` in a
-        uniform direction; drawn in this order."""
-        g, dev, dt = self.generator, self.device, self.pos.dtype
-        box = float(self.flow.start_box)
-        pos = torch.rand(n, self.dim, generator=g, device=dev, dtype=dt) * box
-        orient = self.body.draw_orientations(n, g, dev, dt)
-        target = None
-        if self.task.target:
-            target = self.target_distance * self.body.draw_directions(n, g, dev, dt)
-        return pos, orient, target
+    def start_box(self) -> float:
+        """The side of the cube ``[0, flow.start_box)^d`` the swimmers start in."""
+        return float(self.flow.start_box)
 
     def _channels(self, pos: torch.Tensor) -> torch.Tensor:
         """The body's flow channels at ``pos`` ``(F, S, d)``, ``(F, S, c)``."""
