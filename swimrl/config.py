@@ -27,12 +27,14 @@ from pathlib import Path
 
 from omegaconf import DictConfig, OmegaConf
 
+from swimrl.actuation import ActuationSpec
 from swimrl.analysis.fit_minimal import FitConfig, read_coefficients
 from swimrl.analysis.gain_scan import GainScanConfig
 from swimrl.env import EnvParams
-from swimrl.errors import ConfigError, number_type, one_of
+from swimrl.errors import ConfigError, as_float, number_type, one_of, require
 from swimrl.evaluation.compare import CompareConfig, strategy_variants
 from swimrl.evaluation.rollout import EvalConfig
+from swimrl.flows.analytic import GYROTAXIS_UNITS
 from swimrl.flows.build import FlowSpec
 from swimrl.flows.dns.params import DNSParams
 from swimrl.flows.dns.run import DNSRun
@@ -149,12 +151,33 @@ def runtime(cfg: DictConfig) -> Runtime:
     return Runtime.from_names(cfg.device, cfg.dtype, _int(cfg.threads), cfg.kernel)
 
 
+def gyrotaxis_numbers(swimmer: DictConfig, flow: str) -> dict:
+    r"""``swim_speed`` and ``bottom_heaviness`` from ``swimmer.phi`` $= v_s/u_0$ and
+    ``swimmer.psi`` $= B\omega_0$ where set (each replaces the key it determines), on a flow
+    that defines them (:data:`~swimrl.flows.analytic.GYROTAXIS_UNITS`: Taylor-Green,
+    $v_s/u_\mathrm{rms} = 2\sqrt2\,\Phi$, $B/\tau_K = \Psi/2$); ConfigError otherwise."""
+    out = {}
+    for key, field, index, scale in (("phi", "swim_speed", 0, 1.0),
+                                     ("psi", "bottom_heaviness", 1, -1.0)):
+        value = swimmer.get(key)
+        if value is None:
+            continue
+        require(flow in GYROTAXIS_UNITS, f"swimmer.{key}", value,
+                f"null for flow={flow} (defined for flow={'|'.join(GYROTAXIS_UNITS)})")
+        number = as_float(f"swimmer.{key}", value, lambda v: v > 0, "> 0")
+        out[field] = number * GYROTAXIS_UNITS[flow][index] ** scale
+    return out
+
+
 def env_params(cfg: DictConfig) -> EnvParams:
-    """``swimmer.*``, ``episode.*``, ``signals.names``, ``task.*`` and ``reward.*``."""
+    """``swimmer.*``, ``episode.*``, ``signals.names``, ``task.*``, ``reward.*`` and
+    ``actuation.*``."""
     return from_node(EnvParams, {"swimmer.": cfg.swimmer, "episode.": cfg.episode},
+                     **gyrotaxis_numbers(cfg.swimmer, str(cfg.flow.name)),
                      signals=tuple(cfg.signals.names),
                      task=from_node(TaskSpec, {"task.": cfg.task}),
-                     reward=from_node(RewardSpec, {"reward.": cfg.reward}))
+                     reward=from_node(RewardSpec, {"reward.": cfg.reward}),
+                     actuation=from_node(ActuationSpec, {"actuation.": cfg.actuation}))
 
 
 def flow_spec(flow: DictConfig, rt: Runtime) -> FlowSpec:

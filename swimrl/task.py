@@ -19,7 +19,16 @@ bootstrap), it stops (no further motion, reward or energy) and stays counted as 
 The signals are taken in the frame of $\boldsymbol X - \boldsymbol x$
 ($n_r = \boldsymbol n\cdot\boldsymbol e$, $\boldsymbol e$ the unit vector towards the target).
 
-In both tasks the performance index is the undiscounted return over $v_s T$
+``task=vertical`` (vertical migration, Colabrese et al. 2017): go up. The reward per decision is
+the rise $r_i = z(t_i) - z(t_{i-1})$ ($z$ the vertical coordinate: $y$ in 2D, $z$ in 3D), the
+signals are taken in the frame of the upward vertical ($n_r = \boldsymbol n\cdot\hat{\boldsymbol
+z}$; in 2D $n_\theta = -n_x$), and the performance index is the mean vertical velocity over
+the measuring window after a burn-in, $\langle v_z\rangle/v_s = [z(T) - z(T_b)]/[v_s(T -
+T_b)]$, $T_b$ = ``task.burn_in`` ($\tau_K$). A swimmer whose vertical excursion
+$\max z - \min z$ over the window stays below one cell of the flow
+(:attr:`~swimrl.flows.pointwise.PointFlow.cell_size`) is trapped.
+
+In the two other tasks the performance index is the undiscounted return over $v_s T$
 ($\hat R = |\boldsymbol x(T) - \boldsymbol x_0|/(v_s T)$, resp.
 $(D - \rho_\mathrm{final})/(v_s T)$).
 
@@ -39,7 +48,7 @@ from swimrl.conf_values import yaml_value
 from swimrl.errors import as_float, keep_number_types, one_of
 
 #: The tasks (``task=NAME``); the first is the default.
-TASKS = ("displacement", "target")
+TASKS = ("displacement", "target", "vertical")
 
 
 @dataclass(frozen=True)
@@ -57,11 +66,15 @@ class TaskSpec:
         ``task=target``: the distance $D$ of each swimmer's target from its start.
     arrival_radius
         ``task=target``: a swimmer this close to its target has arrived, ``< distance``.
+    burn_in
+        ``task=vertical``: $T_b$, the start of the measuring window (units $\tau_K$,
+        ``< episode.duration``).
     """
 
     name: str = yaml_value("task/displacement", "name")
     distance: float = yaml_value("task/displacement", "distance")
     arrival_radius: float = yaml_value("task/displacement", "arrival_radius")
+    burn_in: float = yaml_value("task/displacement", "burn_in")
 
     def __post_init__(self) -> None:
         one_of("task.name", self.name, TASKS)
@@ -69,12 +82,18 @@ class TaskSpec:
         as_float("task.arrival_radius", self.arrival_radius,
                  lambda v: 0 < v < float(self.distance),
                  f"in (0, task.distance={self.distance}) (units ell_f)")
+        as_float("task.burn_in", self.burn_in, lambda v: v >= 0, ">= 0 (units tau_K)")
         keep_number_types(self)
 
     @property
     def target(self) -> bool:
         """True for point-to-point navigation."""
         return self.name == "target"
+
+    @property
+    def vertical(self) -> bool:
+        """True for vertical migration."""
+        return self.name == "vertical"
 
 
 @dataclass(frozen=True)

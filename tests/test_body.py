@@ -115,7 +115,7 @@ def test_derived_signals_are_the_tumbling_quantities_and_agree_in_the_plane():
     want = torch.stack((perp.norm(dim=-1), (n * torch.linalg.cross(omega, sn, dim=-1)).sum(-1)),
                        -1)
     torch.testing.assert_close(body(3).derived(g.signals), want, rtol=0, atol=1e-12)
-    assert body(2).derived_names == body(3).derived_names == ("lever", "torque")
+    assert body(2).derived_names[:2] == body(3).derived_names == ("lever", "torque")
     g2 = gaussian_states(2, 500, seed=3)
     theta = g2.orientation
     q3 = torch.zeros(500, 11, dtype=torch.float64)
@@ -124,8 +124,8 @@ def test_derived_signals_are_the_tumbling_quantities_and_agree_in_the_plane():
     n3 = torch.stack((theta.cos(), theta.sin(), 0 * theta), -1)
     e_r = torch.tensor([1.0, 0.0, 0.0], dtype=torch.float64).expand(500, 3)
     sig3 = body(3).signals(q3, n3, e_r, 1.0)
-    torch.testing.assert_close(body(3).derived(sig3), body(2).derived(g2.signals), rtol=0,
-                               atol=1e-12)
+    torch.testing.assert_close(body(3).derived(sig3), body(2).derived(g2.signals)[..., :2],
+                               rtol=0, atol=1e-12)
 
 
 def test_an_env_observes_derived_signals():

@@ -22,6 +22,7 @@ from hydra import compose, initialize_config_module
 from omegaconf import OmegaConf
 
 import swimrl.config
+from swimrl.actuation import ActuationSpec
 from swimrl.analysis.fit_minimal import FitConfig
 from swimrl.analysis.gain_scan import GainScanConfig
 from swimrl.conf_values import yaml_value
@@ -128,7 +129,7 @@ def reads_the_yaml(expr: ast.expr) -> bool:
 READ = (StochasticSpec, StoredRunSpec, LiveDNSSpec, StochasticFlow.__init__, DNSParams, DNSRun,
         EnvParams, SwimmerEnv.__init__, TaskSpec, RewardSpec, Runtime, Runtime.from_names,
         EvalSizes, CompareConfig, strategy_variants, make_mlp, tanh_normal_actor, value_critic,
-        Stochastic3DSpec, LinearSpec, ABCSpec, TaylorGreenSpec)
+        Stochastic3DSpec, LinearSpec, ABCSpec, TaylorGreenSpec, ActuationSpec)
 #: ... but these, written in Python: library-only keywords (no config sets them), torch
 #: dtypes (the yaml's ``dtype`` is a name), and EnvParams's task and reward (``TaskSpec()``,
 #: ``RewardSpec()``, whose own defaults are read).
@@ -137,7 +138,7 @@ WRITTEN = {
     "SwimmerEnv.__init__": ("generator", "ic_blocks", "body"),
     # signals: the 2D set SIGNAL_NAMES (conf/signals/all.yaml gives the flow's dimension's set,
     # an interpolation; test_swimmer_episode_signals_and_runtime checks it composes to this)
-    "EnvParams": ("task", "reward", "signals"),
+    "EnvParams": ("task", "reward", "signals", "actuation"),
     "make_mlp": ("out_gain", "device", "dtype"),
     "tanh_normal_actor": ("device", "dtype"),
     "value_critic": ("device", "dtype"),
@@ -171,7 +172,8 @@ def test_every_typed_config_of_swimrl_config_is_covered():
     """The dataclasses :mod:`swimrl.config` maps are all checked below."""
     mapped = {v for v in vars(swimrl.config).values() if dataclasses.is_dataclass(v)}
     covered = {*NO_DEFAULTS, StochasticSpec, StoredRunSpec, LiveDNSSpec, DNSParams, EnvParams,
-               Runtime, EvalSizes, CompareConfig, StrategySpec, DNSRun, TaskSpec, RewardSpec}
+               Runtime, EvalSizes, CompareConfig, StrategySpec, DNSRun, TaskSpec, RewardSpec,
+               ActuationSpec}
     assert mapped <= covered, sorted(c.__name__ for c in mapped - covered)
 
 
@@ -221,11 +223,13 @@ def test_replayed_and_live_dns_flows():
 @pytest.mark.parametrize("name", WITH_FLOW)
 def test_swimmer_episode_signals_and_runtime(name):
     cfg = _compose(name)
-    swimmer = {k: f"swimmer.{k}" for k in ("swim_speed", "rot_diffusion", "shape_factor_max")}
+    swimmer = {k: f"swimmer.{k}" for k in ("swim_speed", "rot_diffusion", "shape_factor_max",
+                                           "bottom_heaviness")}
     assert_defaults_are_the_yaml(EnvParams, cfg, "episode.",
                                  keys={**swimmer, "signals": "signals.names", "task": "task",
-                                       "reward": "reward"})
+                                       "reward": "reward", "actuation": "actuation"})
     assert_defaults_are_the_yaml(TaskSpec, cfg, "task.")
+    assert_defaults_are_the_yaml(ActuationSpec, cfg, "actuation.")
     assert_defaults_are_the_yaml(RewardSpec, cfg, "reward.")
     # threads differs between commands (evaluate: all cores, train: 1): no default
     for runtime in (Runtime, Runtime.from_names):

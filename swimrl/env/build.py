@@ -13,7 +13,6 @@ from swimrl.env.params import EnvParams, clock_offsets
 from swimrl.env.point import PointSwimmerEnv
 from swimrl.flows.build import FlowSpec, build_flow
 from swimrl.flows.pointwise import PointFlow
-from swimrl.physics.body import body
 from swimrl.runtime import Runtime
 
 
@@ -21,10 +20,12 @@ def env_from_flow(flow, n_swimmers: int, params: EnvParams, **kwargs) -> Swimmer
     """The environment of a flow already built: a :class:`~swimrl.env.core.SwimmerEnv` for a
     :class:`~swimrl.flows.base.GriddedFlow`, a :class:`~swimrl.env.point.PointSwimmerEnv` for
     a :class:`~swimrl.flows.pointwise.PointFlow`, with the body of the flow's dimension
-    (``flow.dim``; a gridded flow is 2D). ``kwargs``: the constructor's (``generator``,
-    ``kernel``, ``ic_blocks``)."""
+    (``flow.dim``; a gridded flow is 2D; bottom-heavy where ``params.bottom_heaviness`` is
+    set: :meth:`~swimrl.env.params.EnvParams.body`). ``kwargs``: the constructor's
+    (``generator``, ``kernel``, ``ic_blocks``)."""
     env_cls = PointSwimmerEnv if isinstance(flow, PointFlow) else SwimmerEnv
-    return env_cls(flow, n_swimmers, params, body=body(getattr(flow, "dim", 2)), **kwargs)
+    return env_cls(flow, n_swimmers, params, body=params.body(getattr(flow, "dim", 2),
+                                                              flow.tau_k), **kwargs)
 
 
 def build_env(

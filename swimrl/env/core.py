@@ -8,16 +8,18 @@ import math
 
 import torch
 from tensordict import TensorDict, TensorDictBase
-from torchrl.data import Bounded, Categorical, Composite, Unbounded
+from torchrl.data import Categorical, Composite, Unbounded
 from torchrl.envs import EnvBase
 
 import swimrl.physics.body as bodies
 from swimrl.conf_values import yaml_value
+from swimrl.env import accounting, vertical
+from swimrl.env.actuation import action_spec, controls
+from swimrl.env.integrity import check_displacement
 from swimrl.env.params import EnvParams, clock_offsets
-from swimrl.errors import ConfigError, IntegrityError
+from swimrl.errors import ConfigError
 from swimrl.flows.base import GriddedFlow
 from swimrl.physics.body import SHAPE_SIGNAL, Body, signal_indices
-from swimrl.physics.energy import drag_factor
 from swimrl.physics.integrator import select_kernel
 
 
@@ -89,7 +91,8 @@ class SwimmerEnv(EnvBase):
             self.generator = torch.Generator(device=flow.device)
         self.flow.generator = self.generator
         #: The swimmer: orientation, channels, signals, Heun step, draws.
-        self.body = body if body is not None else bodies.body(getattr(flow, "dim", 2))
+        self.body = body if body is not None else params.body(getattr(flow, "dim", 2),
+                                                              flow.tau_k)
         #: The space dimension (2 for every gridded flow).
         self.dim = self.body.dim
         #: The signals of the ``signals`` key (all of the body's), in order.
@@ -135,13 +138,18 @@ class SwimmerEnv(EnvBase):
         self.shape_change = torch.zeros(batch, device=dev, dtype=dtype)
         #: The previous decision's ``Lambda`` (NaN before the first; the shape-change cost).
         self.last_action = torch.full(batch, math.nan, device=dev, dtype=dtype)
+        #: ``task=vertical``'s measuring window (:class:`~swimrl.env.vertical.Window`).
+        self.window = vertical.Window(batch, dev, dtype, vertical.burn_in_steps(
+            params.task.burn_in, params.update_interval))
         #: Upper bound of ``max_x |u(x, t)|`` of each flow since its last reset, ``(F,)``.
         self.max_flow_speed = torch.zeros(flow.n_flows, device=dev, dtype=dtype)
         self._flows = torch.arange(flow.n_flows, device=dev)
         #: Clock offsets ``(F,)`` added at the next reset of the flows (:meth:`stagger`).
         self._clock_offset: torch.Tensor | None = None
-        lam = params.shape_factor_max
-        self.action_spec = Bounded(low=-lam, high=lam, shape=batch + (1,), device=dev, dtype=dtype)
+        #: What the action sets (:mod:`swimrl.actuation`).
+        self.actuation = params.actuation
+        self.action_spec = action_spec(params.actuation, params.shape_factor_max, d, batch, dev,
+                                       dtype)
         self.observation_spec = Composite(
             observation=Unbounded(shape=batch + (len(self._obs_idx),), device=dev, dtype=dtype),
             signals=Unbounded(shape=batch + (len(self.signal_names),), device=dev, dtype=dtype),
@@ -152,6 +160,9 @@ class SwimmerEnv(EnvBase):
         if self.task.target:
             self.observation_spec["target_distance"] = Unbounded(
                 shape=batch + (1,), device=dev, dtype=dtype)
+        if self.task.vertical:
+            self.observation_spec["rise"] = Unbounded(shape=batch + (1,), device=dev,
+                                                      dtype=dtype)
         self.reward_spec = Unbounded(shape=batch + (1,), device=dev, dtype=dtype)
         self.done_spec = Composite(
             done=Categorical(2, shape=batch + (1,), dtype=torch.bool, device=dev),
@@ -187,8 +198,9 @@ class SwimmerEnv(EnvBase):
         return flow.u_rms
 
     def _select_kernel(self, kernel: str, device: torch.device):
-        """The integration function (:func:`~swimrl.physics.integrator.select_kernel`)."""
-        return select_kernel(kernel, device)
+        """The integration function (:func:`~swimrl.physics.integrator.select_kernel`; only the
+        eager one where the body has a torque)."""
+        return select_kernel(kernel, device, torque=self.body.extra_rate is not None)
 
     @property
     def n_swimmers(self) -> int:
@@ -212,13 +224,8 @@ class SwimmerEnv(EnvBase):
         return self.start_pos + self.flow.grid.length * self.start_image.to(self.pos.dtype)
 
     def displacement(self) -> torch.Tensor:
-        """The unwrapped displacement from the start ``x - x_0 = (p - p_0) + L (m - m_0)``.
-
-        Returns
-        -------
-        torch.Tensor
-            ``(F, S, 2)``, in the flow's length unit.
-        """
+        """The unwrapped displacement from the start ``x - x_0 = (p - p_0) + L (m - m_0)``,
+        ``(F, S, 2)`` in the flow's length unit."""
         length = self.flow.grid.length
         return (self.pos - self.start_pos) + length * (self.image - self.start_image).to(
             self.pos.dtype
@@ -233,10 +240,15 @@ class SwimmerEnv(EnvBase):
 
     def frame(self, displacement: torch.Tensor | None = None) -> torch.Tensor:
         """The vector whose direction is the signals' ``e_r``, ``(F, S, d)``: ``x - x_0``
-        (``task=displacement``) or ``X - x``, towards the target (``task=target``); a new task
-        overrides it (``docs/extending.md``). ``displacement``: ``x - x_0`` if at hand."""
+        (``task=displacement``), ``X - x``, towards the target (``task=target``) or the upward
+        vertical (``task=vertical``); a new task overrides it (``docs/extending.md``).
+        ``displacement``: ``x - x_0`` if at hand."""
         if displacement is None:
             displacement = self.displacement()
+        if self.task.vertical:
+            up = torch.zeros_like(displacement)
+            up[..., self.body.vertical_axis] = 1.0
+            return up
         return self.target - displacement if self.task.target else displacement
 
     def signals(self, displacement: torch.Tensor | None = None) -> torch.Tensor:
@@ -264,6 +276,8 @@ class SwimmerEnv(EnvBase):
             "terminated": torch.zeros_like(truncated),
             "truncated": truncated,
         }
+        if self.task.vertical:
+            out["rise"] = vertical.rise(disp, self.body.vertical_axis).unsqueeze(-1)
         if self.task.target:
             arrived = self.arrived.unsqueeze(-1)
             out.update(target_distance=(self.target - disp).norm(dim=-1, keepdim=True),
@@ -289,28 +303,20 @@ class SwimmerEnv(EnvBase):
         if self.task.target:
             remaining = td.get("target_distance").squeeze(-1)
             return (self.target_distance - remaining) / self.reference_distance
+        if self.task.vertical:
+            return self.window.vertical_velocity(td.get("rise").squeeze(-1), self.swim_speed,
+                                                 self.window_time())
         return td.get("distance").squeeze(-1) / self.reference_distance
 
-    def outcomes(self) -> dict[str, torch.Tensor]:
-        """Per-swimmer results besides :meth:`score`.
+    def window_time(self) -> float:
+        """``T - T_b`` in flow units (``task=vertical``)."""
+        p = self.params
+        return (p.n_decisions - self.window.start_step) * p.update_interval * self.tau_k
 
-        Returns
-        -------
-        dict[str, torch.Tensor]
-            ``(F, S)`` each: ``energy`` (``E_hat``, :mod:`swimrl.physics.energy`),
-            ``shape_change`` (``C_hat = (1/T) sum_i |Lambda_i - Lambda_{i-1}| T_u``, the
-            quantity ``reward.shape_change_weight`` prices) and, for
-            ``task=target``, ``arrived`` (0/1), ``arrival_time`` (units ``tau_K``; NaN where
-            not arrived) and ``final_distance`` (``|X - x|``, units ``ell_f``).
-        """
-        out = {"energy": self.energy.clone(), "shape_change": self.shape_change.clone()}
-        if self.task.target:
-            time = self.arrival_step.to(self.energy.dtype) * self.params.update_interval
-            rho = (self.target - self.displacement()).norm(dim=-1)
-            out.update(arrived=self.arrived.to(self.energy.dtype),
-                       arrival_time=torch.where(self.arrived, time, math.nan),
-                       final_distance=rho / self.flow.ell_f)
-        return out
+    def outcomes(self) -> dict[str, torch.Tensor]:
+        """Per-swimmer results besides :meth:`score`, ``(F, S)`` each
+        (:func:`~swimrl.env.accounting.outcomes`: energy, shape change and the task's)."""
+        return accounting.outcomes(self)
 
     # -- EnvBase API ---------------------------------------------------------------------------
     def _reset(self, tensordict: TensorDictBase | None = None, **kwargs) -> TensorDictBase:
@@ -356,6 +362,7 @@ class SwimmerEnv(EnvBase):
             self.arrival_step[mask] = -1
             self.energy[mask] = 0
             self.shape_change[mask] = 0
+            self.window.reset(mask)
             self.last_action[mask] = math.nan
         return self._observe()
 
@@ -372,19 +379,38 @@ class SwimmerEnv(EnvBase):
             target = self.target_distance * self.body.draw_directions(n, g, dev, dt)
         return new_pos, new_orient, target
 
+    def cell_size(self) -> float:
+        """One cell of the flow (``task=vertical``'s trapping scale): the flow's
+        ``cell_size`` where it has one, else its length ``ell_f``."""
+        return float(getattr(self.flow, "cell_size", self.flow.ell_f))
+
+    def _progress(self, displacement: torch.Tensor) -> torch.Tensor:
+        """What the reward counts the increase of, ``(F, S)``: ``|x - x_0|``, or the rise
+        ``z - z_0`` (``task=vertical``)."""
+        if self.task.vertical:
+            return vertical.rise(displacement, self.body.vertical_axis)
+        return displacement.norm(dim=-1)
+
     def _step(self, tensordict: TensorDictBase) -> TensorDictBase:
-        lam_max = self.params.shape_factor_max
-        action = tensordict.get("action").reshape(-1).clamp(-lam_max, lam_max)
+        action, direction = controls(self.actuation, tensordict.get("action"),
+                                     self.params.shape_factor_max, self.batch_size, self.dim,
+                                     self.pos.dtype)
+        if direction is not None:
+            self.body.steer(direction)
         if self.task.target:
             return self._step_target(action)
-        dist_before = self.displacement().norm(dim=-1)
+        before = self._progress(self.displacement())
         self.integrate(action)
         self.step_count += 1
         self.flow_step += 1
         shape = action.view(self.batch_size)
         cost = self._cost(shape, torch.ones_like(self.arrived))
+        disp = self.displacement()
+        after = self._progress(disp)
+        if self.task.vertical:
+            self.window.update(after, self.step_count)
         out = self._observe()
-        reward = out.get("distance").squeeze(-1) - dist_before
+        reward = after - before
         out.set("reward", (reward if cost is None else reward - cost).unsqueeze(-1))
         return out
 
@@ -414,22 +440,8 @@ class SwimmerEnv(EnvBase):
         return out
 
     def _cost(self, shape: torch.Tensor, moving: torch.Tensor) -> torch.Tensor | None:
-        """Account the decision just taken by the ``moving`` swimmers with shape factor
-        ``shape`` (``(F, S)``): ``E_hat += K(Lambda) T_u / T``,
-        ``C_hat += |Lambda - Lambda_prev| T_u / T`` (0 at the first decision); returns the
-        reward's cost ``w K(Lambda) v_s T_u + w_c |Lambda - Lambda_prev| v_s T_u`` (None when
-        both weights are 0)."""
-        drag = drag_factor(shape)
-        zero = torch.zeros_like(drag)
-        self.energy += torch.where(moving, drag, zero) / self.params.n_decisions
-        w, w_c = self.params.reward.energy_weight, self.params.reward.shape_change_weight
-        change = (shape - self.last_action).abs().nan_to_num(nan=0.0)
-        self.shape_change += torch.where(moving, change, zero) / self.params.n_decisions
-        self.last_action = torch.where(moving, shape, self.last_action)
-        if w == 0 and w_c == 0:
-            return None
-        cost = (w * drag + w_c * change) * self.decision_length
-        return torch.where(moving, cost, zero)
+        """Account the decision just taken (:func:`~swimrl.env.accounting.account`)."""
+        return accounting.account(self, shape, moving)
 
     def integrate(self, shape_factor: torch.Tensor) -> None:
         """Advance all swimmers and flows by one decision interval with ``Lambda`` held fixed.
@@ -454,6 +466,7 @@ class SwimmerEnv(EnvBase):
                 (k,) + theta.shape, generator=self.generator, device=self.device, dtype=theta.dtype
             )
         grid = self.flow.grid
+        torque = {} if self.body.extra_rate is None else {"extra_rate": self.body.extra_rate}
         pos, theta = self._kernel(
             self.flow.table,
             path,
@@ -466,33 +479,17 @@ class SwimmerEnv(EnvBase):
             grid.spacing,
             self.swim_speed,
             self.dt,
+            **torque,
         )
         self.pos.copy_(pos.view_as(self.pos))
         self.orientation.copy_(self.body.normalise(theta).view_as(self.orientation))
         self._wrap()
 
     def check_displacement(self, slack: float = 1e-3) -> None:
-        """Refuse a physically impossible state: every swimmer obeys
-        ``|x(t) - x_0| <= (v_s + U_f) t``, with ``t`` its time since its start and ``U_f`` the
-        bound of ``max_x |u|`` of its flow over that time (:attr:`max_flow_speed`), since
-        ``dx/dt = u + v_s n`` and the Heun steps average two such velocities. ``slack``
-        (relative) covers float rounding. Raises :class:`~swimrl.errors.IntegrityError` (one
-        line naming the worst swimmer and the bound) otherwise, NaN included."""
-        t = self.step_count.to(self.pos.dtype) * (self.params.update_interval * self.tau_k)
-        bound = (self.swim_speed + self.max_flow_speed).unsqueeze(1) * t
-        dist = self.displacement().norm(dim=-1)
-        bad = ~(dist <= bound * (1 + slack) + 1e-6 * self.length_resolution())
-        if bool(bad.any()):
-            excess = torch.where(bad, dist / bound.clamp_min(1e-30), torch.zeros_like(dist))
-            excess = excess.nan_to_num(nan=math.inf)
-            f, s = divmod(int(excess.argmax()), self.n_swimmers)
-            raise IntegrityError(
-                f"impossible result: swimmer {s} of flow {f} is {float(dist[f, s]):.4g} from "
-                f"its start after t = {float(t[f, s]):.4g}, beyond (v_s + max|u|) t = "
-                f"{float(bound[f, s]):.4g} (v_s = {self.swim_speed:.4g}, max|u| <= "
-                f"{float(self.max_flow_speed[f]):.4g}); {int(bad.sum())} swimmers affected, "
-                "nothing written"
-            )
+        """Refuse a physically impossible state
+        (:func:`~swimrl.env.integrity.check_displacement`): ``|x(t) - x_0| <= (v_s + U_f) t``
+        for every swimmer, else one :class:`~swimrl.errors.IntegrityError` line."""
+        check_displacement(self, slack)
 
     def _set_seed(self, seed: int | None) -> None:
         if seed is None:

@@ -7,10 +7,12 @@ from dataclasses import dataclass, field
 
 import torch
 
+from swimrl.actuation import ActuationSpec
 from swimrl.conf_values import yaml_value
-from swimrl.errors import ConfigError, as_float, keep_number_types
-from swimrl.physics.body import BODIES, observable_names, signal_indices
+from swimrl.errors import ConfigError, as_float, keep_number_types, require
+from swimrl.physics.body import BODIES, Body, body, observable_names, signal_indices
 from swimrl.physics.body2d import SIGNAL_NAMES
+from swimrl.physics.gyrotaxis import GyrotacticBody
 from swimrl.task import RewardSpec, TaskSpec
 
 
@@ -62,6 +64,12 @@ class EnvParams:
         The task (``task.*``): displacement (the paper's) or target.
     reward
         The energy costs added to the reward (``reward.*``; none by default).
+    bottom_heaviness
+        The gyrotactic reorientation time ``B / tau_K`` (``swimmer.bottom_heaviness``; None:
+        no gyrotaxis), :mod:`swimrl.physics.gyrotaxis`.
+    actuation
+        What the action sets (``actuation.*``): the shape (the paper's), the direction, or
+        both (:mod:`swimrl.actuation`).
 
     Attributes
     ----------
@@ -80,6 +88,8 @@ class EnvParams:
     signals: tuple[str, ...] = SIGNAL_NAMES
     task: TaskSpec = TaskSpec()
     reward: RewardSpec = RewardSpec()
+    bottom_heaviness: float | None = yaml_value("evaluate", "swimmer.bottom_heaviness")
+    actuation: ActuationSpec = ActuationSpec()
     n_substeps: int = field(init=False)
     n_decisions: int = field(init=False)
 
@@ -93,6 +103,16 @@ class EnvParams:
                  lambda v: 0 < v <= self.duration, f"in (0, episode.duration={self.duration}]")
         as_float("swimmer.shape_factor_max", self.shape_factor_max, lambda v: 0 < v < 1,
                  "in (0, 1)")
+        if self.bottom_heaviness is not None:
+            as_float("swimmer.bottom_heaviness", self.bottom_heaviness, lambda v: v > 0,
+                     "> 0 (units tau_K) or null (no gyrotaxis)")
+        require(not self.actuation.steers or self.bottom_heaviness is not None,
+                "actuation.name", self.actuation.name,
+                "'shape' without swimmer.bottom_heaviness (a preferred direction steers through "
+                "the gyrotactic torque: set swimmer.bottom_heaviness > 0)")
+        if self.task.vertical:
+            as_float("task.burn_in", self.task.burn_in, lambda v: v < self.duration,
+                     f"in [0, episode.duration={self.duration}) (units tau_K)")
         every = tuple(name for b in BODIES.values() for name in observable_names(b))
         signal_indices(self.signals, tuple(dict.fromkeys(every)))
         object.__setattr__(
@@ -112,6 +132,17 @@ class EnvParams:
             ),
         )
         keep_number_types(self)
+
+    def body(self, dim: int, tau_k: float) -> Body:
+        """The swimmer of a ``dim``-dimensional flow of time unit ``tau_k``: the body of the
+        dimension (:func:`~swimrl.physics.body.body`), bottom-heavy
+        (:class:`~swimrl.physics.gyrotaxis.GyrotacticBody`, ``B`` in flow units) where
+        ``bottom_heaviness`` is set. A new object for a gyrotactic swimmer (it holds the
+        swimmers' preferred directions)."""
+        base = body(dim)
+        if self.bottom_heaviness is None:
+            return base
+        return GyrotacticBody(base, self.bottom_heaviness * tau_k)
 
 
 def clock_offsets(n_flows: int, n_decisions: int, groups: int, device=None

@@ -60,6 +60,9 @@ class PointSwimmerEnv(SwimmerEnv):
         ``auto`` on the CPU stays eager (the committed 3D records' path)."""
         one_of("kernel", kernel, (*POINT_KERNELS, "fused"))
         if kernel == "fused":
+            require(self.body.extra_rate is None, "kernel", kernel,
+                    "one of ['auto', 'eager', 'compiled'] for a gyrotactic swimmer "
+                    "(swimmer.bottom_heaviness set): the fused kernel has no torque")
             require(isinstance(self.flow, StochasticFlow3D), "kernel", kernel,
                     "one of ['auto', 'eager', 'compiled'] for this flow (fused: "
                     "flow=stochastic3d on the CPU)")

@@ -185,6 +185,8 @@ class ABCFlow(PointFlow):
         self.u_rms = math.sqrt(u2)
         self.tau_k = a2**-0.5 if a2 > 0 else math.inf
         self.start_box = 2 * math.pi / min(t[3] for t in self.terms)
+        #: Half the longest period, $\pi/k_\min$ (``task=vertical``'s trapping scale).
+        self.cell_size = math.pi / min(t[3] for t in self.terms)
         bound = math.fsum(math.hypot(abs(a) + abs(c), abs(b) + abs(a), abs(c) + abs(b))
                           for a, b, c, _ in self.terms)
         self._bound = torch.full((self.n_flows,), bound, device=self.device, dtype=dtype)
@@ -231,6 +233,12 @@ class TaylorGreenFlow(PointFlow):
     $$
 
     $u_\mathrm{rms} = U/\sqrt2$, $\tau_K = 1/(Uk)$, vorticity $\omega = 2Uk\sin kx\sin ky$.
+
+    It is the cellular flow of the gyrotaxis papers (Durham et al. 2011; Colabrese et al.
+    2017), $\boldsymbol u = (u_0/2)(-\cos kx'\sin kz', \sin kx'\cos kz')$,
+    $\omega = \omega_0\cos kx'\cos kz'$ with $\omega_0 = u_0 k$, on the lattice shifted by
+    $x' = x - \pi/2k$, $z' = y - \pi/2k$ ($y$ vertical), with $U = u_0/2$
+    (:data:`GYROTAXIS_UNITS`). One vortex, :attr:`cell_size`, is $\pi/k$ wide.
     """
 
     dim: int = 2
@@ -247,6 +255,8 @@ class TaylorGreenFlow(PointFlow):
         rate = abs(self.amplitude) * self.wavenumber
         self.tau_k = 1.0 / rate if rate > 0 else math.inf
         self.start_box = 2 * math.pi / self.wavenumber
+        #: One vortex of the lattice, $\pi/k$ (``task=vertical``'s trapping scale).
+        self.cell_size = math.pi / self.wavenumber
         self._bound = torch.full((self.n_flows,), abs(self.amplitude), device=self.device,
                                  dtype=dtype)
 
@@ -266,6 +276,13 @@ class TaylorGreenFlow(PointFlow):
         cc, ss = amp * k * cx * cy, amp * k * sx * sy
         grad = torch.stack((torch.stack((cc, -ss), -1), torch.stack((ss, -cc), -1)), -2)
         return u, grad
+
+
+#: The flows on which the gyrotaxis numbers $\Phi = v_s/u_0$ and $\Psi = B\omega_0$
+#: (``swimmer.phi``, ``swimmer.psi``) are defined: ``(u_0/u_\mathrm{rms}, \omega_0\tau_K)``.
+#: Taylor-Green: $u_0 = 2U$, $u_\mathrm{rms} = U/\sqrt2$, $\omega_0 = 2Uk$, $\tau_K = 1/(Uk)$,
+#: so $v_s/u_\mathrm{rms} = 2\sqrt2\,\Phi$ and $B/\tau_K = \Psi/2$.
+GYROTAXIS_UNITS: dict[str, tuple[float, float]] = {"taylor_green": (2 * math.sqrt(2.0), 2.0)}
 
 
 # -- the registry's entries (flow=linear | abc | taylor_green) ---------------------------------

@@ -43,6 +43,8 @@ class Body(Protocol):
 
     #: The dimension of space.
     dim: int
+    #: The axis of the upward vertical (the last one).
+    vertical_axis: int
     #: The environment's attribute and the trajectories' key of the orientation.
     orientation_name: str
     #: Per-swimmer shape of the orientation and of one step's rotational noise.
@@ -53,6 +55,9 @@ class Body(Protocol):
     signal_names: tuple[str, ...]
     #: Signals computed from them, observable too (:meth:`derived`).
     derived_names: tuple[str, ...]
+    #: A further rate of the orientation added by the Heun step (None: none; the torque of a
+    #: :class:`~swimrl.physics.gyrotaxis.GyrotacticBody`).
+    extra_rate: Callable[[torch.Tensor], torch.Tensor] | None
 
     def channels(self, u: torch.Tensor, grad: torch.Tensor) -> torch.Tensor:
         """The channels from ``u`` ``(..., d)`` and ``A_ij = d_j u_i`` ``(..., d, d)``."""
@@ -86,9 +91,16 @@ class Body(Protocol):
     def heun_step(self, channels: Callable[[torch.Tensor], torch.Tensor],
                   advance: Callable[[], None], pos: torch.Tensor, orientation: torch.Tensor,
                   shape_factor: torch.Tensor, swim_speed: float, dt: float,
-                  noise: torch.Tensor | None, rot_diffusion: float, tau_k: float
+                  noise: torch.Tensor | None, rot_diffusion: float, tau_k: float,
+                  extra_rate: Callable[[torch.Tensor], torch.Tensor] | None = None
                   ) -> tuple[torch.Tensor, torch.Tensor]:
-        """One Heun step of positions and orientations, ``Lambda`` held."""
+        """One Heun step of positions and orientations, ``Lambda`` held; ``extra_rate`` a
+        further rate of the orientation (an angle rate in 2D, an angular velocity in 3D)."""
+
+    def alignment_rate(self, orientation: torch.Tensor, direction: torch.Tensor,
+                       bottom_heaviness: float) -> torch.Tensor:
+        """The rate of the orientation under the torque ``[k - (k.n) n] / (2B)`` of a
+        bottom-heavy swimmer (the form :meth:`heun_step`'s ``extra_rate`` takes)."""
 
     def normalise(self, orientation: torch.Tensor) -> torch.Tensor:
         """The orientation in its canonical range (the angle mod 2 pi in 2D)."""

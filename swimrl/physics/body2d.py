@@ -40,6 +40,29 @@ SIGNAL_NAMES: tuple[str, ...] = ("n_r", "n_theta", "S_nn", "S_np", "omega")
 #: (:mod:`swimrl.physics.tumbling`); observable with ``signals.names`` (``signals=invariant``).
 DERIVED_NAMES: tuple[str, ...] = ("lever", "torque")
 
+#: Colabrese et al.'s (2017) twelve states, one-hot (:func:`twelve_states`).
+STATE12_NAMES: tuple[str, ...] = tuple(f"state12_{i}" for i in range(12))
+
+#: The vorticity bins' edge in units of $1/\tau_K$: $|\omega|\tau_K = 2/3$, i.e.
+#: $|\omega| = \omega_0/3$ in the Taylor-Green flow ($\omega_0\tau_K = 2$).
+STATE12_VORTICITY = 2.0 / 3.0
+
+
+def twelve_states(signals: torch.Tensor) -> torch.Tensor:
+    r"""Colabrese et al.'s (2017) discrete state, one-hot ``(..., 12)``: index
+    $4 b_\omega + b_n$ with the vorticity bin $b_\omega$ = 0, 1, 2 for
+    $\omega\tau_K < -2/3$, within $\pm 2/3$, $> 2/3$ (:data:`STATE12_VORTICITY`) and the heading
+    sector $b_n$ = 0, 1, 2, 3 for $\boldsymbol n$ within $\pm45°$ of $+\boldsymbol e_r$,
+    $-\boldsymbol e_\theta$, $-\boldsymbol e_r$, $+\boldsymbol e_\theta$. With
+    ``task=vertical`` ($\boldsymbol e_r = \hat y$, $\boldsymbol e_\theta = -\hat x$) the
+    sectors are up, right, down, left."""
+    n_r, n_th, omega = signals[..., 0], signals[..., 1], signals[..., 4]
+    b_w = (omega > -STATE12_VORTICITY).long() + (omega > STATE12_VORTICITY).long()
+    along, across = n_r.abs() >= n_th.abs(), n_th.abs() > n_r.abs()
+    b_n = torch.where(along & (n_r >= 0), 0, torch.where(across & (n_th < 0), 1,
+                      torch.where(along, 2, 3)))
+    return torch.nn.functional.one_hot(4 * b_w + b_n, 12).to(signals.dtype)
+
 
 def compute_signals(
     q: torch.Tensor, theta: torch.Tensor, displacement: torch.Tensor, tau_k: float
@@ -101,14 +124,19 @@ class Body2D:
     (``eq:sto``)."""
 
     dim = 2
+    #: The axis of the upward vertical (gyrotaxis, ``task=vertical``): $y$.
+    vertical_axis = 1
     #: The environment's attribute and the trajectories' key of the orientation.
     orientation_name = "theta"
     #: Per-swimmer shape of the orientation and of one step's rotational noise.
     orientation_shape: tuple[int, ...] = ()
     n_channels = 5
     signal_names = SIGNAL_NAMES
-    #: Frame-invariant signals computed from the five (:meth:`derived`).
-    derived_names = DERIVED_NAMES
+    #: Frame-invariant signals and the twelve states computed from the five (:meth:`derived`).
+    derived_names = DERIVED_NAMES + STATE12_NAMES
+    #: A further rate of the orientation (None; a gyrotactic body's torque,
+    #: :class:`~swimrl.physics.gyrotaxis.GyrotacticBody`).
+    extra_rate = None
 
     def channels(self, u: torch.Tensor, grad: torch.Tensor) -> torch.Tensor:
         """The five channels from ``u`` and ``grad`` (:func:`channels_2d`)."""
@@ -128,10 +156,11 @@ class Body2D:
         = |S_{np}|\tau_K$ and the torque
         $\boldsymbol n\cdot(\boldsymbol\omega\times\mathbb S\boldsymbol n)\tau_K^2
         = -\omega S_{np}\tau_K^2$ (in the plane, $\boldsymbol\omega = \omega\hat z$), the 3D
-        :meth:`Body3D.derived <swimrl.physics.body3d.Body3D.derived>` in the plane,
-        ``(..., 2)``."""
+        :meth:`Body3D.derived <swimrl.physics.body3d.Body3D.derived>` in the plane; then the
+        twelve one-hot states (:func:`twelve_states`), ``(..., 14)``."""
         s_np = signals[..., 3]
-        return torch.stack((s_np.abs(), -signals[..., 4] * s_np), -1)
+        return torch.cat((torch.stack((s_np.abs(), -signals[..., 4] * s_np), -1),
+                          twelve_states(signals)), -1)
 
     def sto_sign(self, signals: torch.Tensor) -> torch.Tensor:
         r"""$\sigma = -\mathrm{sign}(n_\theta)\,\mathrm{sign}(S_{np})$: STO is
@@ -160,12 +189,14 @@ class Body2D:
     def heun_step(self, channels: Callable[[torch.Tensor], torch.Tensor],
                   advance: Callable[[], None], pos: torch.Tensor, theta: torch.Tensor,
                   shape_factor: torch.Tensor, swim_speed: float, dt: float,
-                  noise: torch.Tensor | None, rot_diffusion: float, tau_k: float
+                  noise: torch.Tensor | None, rot_diffusion: float, tau_k: float,
+                  extra_rate: Callable[[torch.Tensor], torch.Tensor] | None = None
                   ) -> tuple[torch.Tensor, torch.Tensor]:
         r"""One Heun step (:func:`~swimrl.physics.swimmer.heun_step`) of swimmers ``(..., 2)``,
         ``theta`` ``(...)``; ``channels(pos)`` ``(..., 5)``; with ``noise`` (standard normal,
         ``(...)``) the angle kick $\sqrt{2 D_r\,\delta t}\,\xi$,
-        $D_r$ = ``rot_diffusion / tau_k``."""
+        $D_r$ = ``rot_diffusion / tau_k``; ``extra_rate(theta)`` a further
+        $\mathrm d\theta/\mathrm dt$ (angles flattened to ``(P,)``)."""
         batch = theta.shape
         kick = None
         if noise is not None:
@@ -175,8 +206,19 @@ class Body2D:
             return channels(p.view(*batch, 2)).view(-1, 5)
 
         pos, theta = heun_step(flat, advance, pos.reshape(-1, 2), theta.reshape(-1),
-                               shape_factor.reshape(-1), swim_speed, dt, kick)
+                               shape_factor.reshape(-1), swim_speed, dt, kick, extra_rate)
         return pos.view(*batch, 2), theta.view(batch)
+
+    def alignment_rate(self, theta: torch.Tensor, direction: torch.Tensor,
+                       bottom_heaviness: float) -> torch.Tensor:
+        r"""The rotation of $\boldsymbol n$ towards $\boldsymbol k$ by the torque of a bottom-heavy
+        swimmer, $\dot{\boldsymbol n} = [\boldsymbol k - (\boldsymbol k\cdot\boldsymbol n)
+        \boldsymbol n]/(2B)$, as an angle rate:
+        $\dot\theta = (\boldsymbol n\times\boldsymbol k)_z/(2B)
+        = (k_y\cos\theta - k_x\sin\theta)/(2B)$; ``direction`` $\boldsymbol k$
+        ``(..., 2)``, ``(...)``."""
+        return (direction[..., 1] * torch.cos(theta)
+                - direction[..., 0] * torch.sin(theta)) / (2.0 * bottom_heaviness)
 
     def normalise(self, theta: torch.Tensor) -> torch.Tensor:
         r"""$\theta \bmod 2\pi$."""

@@ -147,6 +147,8 @@ class Body3D:
     (:mod:`swimrl.policies.baselines`, derived there)."""
 
     dim = 3
+    #: The axis of the upward vertical (gyrotaxis, ``task=vertical``): $z$.
+    vertical_axis = 2
     #: The environment's attribute and the trajectories' key of the orientation.
     orientation_name = "orientation"
     #: Per-swimmer shape of the orientation and of one step's rotational noise.
@@ -155,6 +157,9 @@ class Body3D:
     signal_names = SIGNAL_NAMES_3D
     #: Frame-invariant signals computed from the seven (:meth:`derived`).
     derived_names = DERIVED_NAMES
+    #: A further rate of the orientation (None; a gyrotactic body's torque,
+    #: :class:`~swimrl.physics.gyrotaxis.GyrotacticBody`).
+    extra_rate = None
 
     def channels(self, u: torch.Tensor, grad: torch.Tensor) -> torch.Tensor:
         """The eleven channels from ``u`` and ``grad``
@@ -212,13 +217,23 @@ class Body3D:
     def heun_step(self, channels: Callable[[torch.Tensor], torch.Tensor],
                   advance: Callable[[], None], pos: torch.Tensor, n: torch.Tensor,
                   shape_factor: torch.Tensor, swim_speed: float, dt: float,
-                  noise: torch.Tensor | None, rot_diffusion: float, tau_k: float
+                  noise: torch.Tensor | None, rot_diffusion: float, tau_k: float,
+                  extra_rate: Callable[[torch.Tensor], torch.Tensor] | None = None
                   ) -> tuple[torch.Tensor, torch.Tensor]:
         r"""One Heun step (:func:`~swimrl.physics.swimmer3d.heun_step_3d`) of swimmers
         ``(..., 3)``; ``channels(pos)`` ``(..., 11)``; with ``noise`` (standard normal,
-        ``(..., 3)``) the exact spherical diffusion step, $D_r$ = ``rot_diffusion / tau_k``."""
+        ``(..., 3)``) the exact spherical diffusion step, $D_r$ = ``rot_diffusion / tau_k``;
+        ``extra_rate(n)`` a further angular velocity ``(..., 3)``."""
         return heun_step_3d(channels, advance, pos, n, shape_factor, swim_speed, dt, noise,
-                            rot_diffusion / tau_k)
+                            rot_diffusion / tau_k, extra_rate)
+
+    def alignment_rate(self, n: torch.Tensor, direction: torch.Tensor,
+                       bottom_heaviness: float) -> torch.Tensor:
+        r"""The angular velocity $\boldsymbol w_g = \boldsymbol n\times\boldsymbol k/(2B)$ of a
+        bottom-heavy swimmer: $\boldsymbol w_g\times\boldsymbol n = [\boldsymbol k -
+        (\boldsymbol k\cdot\boldsymbol n)\boldsymbol n]/(2B)$; ``direction`` $\boldsymbol k$
+        ``(..., 3)``, ``(..., 3)``."""
+        return torch.linalg.cross(n, direction, dim=-1) / (2.0 * bottom_heaviness)
 
     def normalise(self, n: torch.Tensor) -> torch.Tensor:
         """``n`` as it is (each step normalises it)."""

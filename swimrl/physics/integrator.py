@@ -53,11 +53,14 @@ def integrate_interval(
     spacing: float,
     swim_speed: float,
     dt: float,
+    extra_rate=None,
 ) -> tuple[torch.Tensor, torch.Tensor]:
     r"""Advance ``(pos, theta)`` by $K$ Heun steps of size ``dt`` with $\Lambda$ fixed.
 
     ``table`` is the flow basis ``(F n n, M 5)``, ``coeff_path`` ``(K+1, F, M)`` the
-    coefficients at the step times, ``kicks`` ``(K, P)`` rotational-noise increments or None.
+    coefficients at the step times, ``kicks`` ``(K, P)`` rotational-noise increments or None;
+    ``extra_rate(theta)`` a further $\mathrm d\theta/\mathrm dt$ (the gyrotactic torque,
+    :mod:`swimrl.physics.gyrotaxis`; only this kernel takes it).
     """
     stage = [0]
 
@@ -69,7 +72,8 @@ def integrate_interval(
 
     for k in range(coeff_path.shape[0] - 1):
         kick = None if kicks is None else kicks[k]
-        pos, theta = heun_step(sample, advance, pos, theta, shape_factor, swim_speed, dt, kick)
+        pos, theta = heun_step(sample, advance, pos, theta, shape_factor, swim_speed, dt, kick,
+                               extra_rate)
     return pos, theta
 
 
@@ -182,10 +186,17 @@ def integrate_interval_compiled(
 KERNELS = ("auto", "eager", "fused", "compiled")
 
 
-def select_kernel(name: str, device: torch.device):
+def select_kernel(name: str, device: torch.device, torque: bool = False):
     """The integration function for ``kernel=name``. ``auto``: ``fused`` on the CPU when it
-    builds (else ``eager``), ``compiled`` on any other device."""
+    builds (else ``eager``), ``compiled`` on any other device. ``torque``: the swimmer feels a
+    gyrotactic torque, which only ``eager`` integrates (``auto`` picks it; ``fused`` and
+    ``compiled`` refuse in one line)."""
     one_of("kernel", name, KERNELS)
+    if torque:
+        require(name in ("auto", "eager"), "kernel", name,
+                "'auto' or 'eager' for a gyrotactic swimmer (swimmer.bottom_heaviness set): "
+                "only the eager kernel integrates its torque")
+        return integrate_interval
     if name == "compiled" or (name == "auto" and device.type != "cpu"):
         return integrate_interval_compiled
     if name == "eager" or device.type != "cpu":

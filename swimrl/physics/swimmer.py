@@ -92,6 +92,7 @@ def heun_step(
     swim_speed: float,
     dt: float,
     rot_kick: torch.Tensor | None = None,
+    extra_rate: Callable[[torch.Tensor], torch.Tensor] | None = None,
 ) -> tuple[torch.Tensor, torch.Tensor]:
     r"""One Heun step of $(\boldsymbol x, \theta)$ over $[t, t + \delta t]$, $\Lambda$ held.
 
@@ -109,6 +110,9 @@ def heun_step(
         $v_s$ and the step $\delta t$, in the flow's units.
     rot_kick
         The rotational noise increment $\sqrt{2D_r\,\delta t}\,\xi$ of this step (or None).
+    extra_rate
+        ``extra_rate(theta)``: a further term of $\mathrm d\theta/\mathrm dt$ added at both
+        stages, e.g. the gyrotactic torque (:mod:`swimrl.physics.gyrotaxis`); None: none.
 
     Returns
     -------
@@ -116,12 +120,16 @@ def heun_step(
         Positions and angles at $t + \delta t$.
     """
     v1, w1 = swimmer_rhs(sample(pos), theta, shape_factor, swim_speed)
+    if extra_rate is not None:
+        w1 = w1 + extra_rate(theta)
     pos_p = pos + dt * v1
     theta_p = theta + dt * w1
     if rot_kick is not None:
         theta_p = theta_p + rot_kick
     advance()
     v2, w2 = swimmer_rhs(sample(pos_p), theta_p, shape_factor, swim_speed)
+    if extra_rate is not None:
+        w2 = w2 + extra_rate(theta_p)
     pos = pos + (0.5 * dt) * (v1 + v2)
     theta = theta + (0.5 * dt) * (w1 + w2)
     if rot_kick is not None:

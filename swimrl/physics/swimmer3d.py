@@ -280,6 +280,7 @@ def heun_step_3d(
     dt: float,
     rot_noise: torch.Tensor | None = None,
     rot_diffusion: float = 0.0,
+    extra_rate: Callable[[torch.Tensor], torch.Tensor] | None = None,
 ) -> tuple[torch.Tensor, torch.Tensor]:
     r"""One Heun step of $(\boldsymbol x, \boldsymbol n)$ over $[t, t + \delta t]$, $\Lambda$ held
     (module docstring):
@@ -305,6 +306,9 @@ def heun_step_3d(
         Standard normal numbers ``(..., 3)`` of this step's rotational noise (or None).
     rot_diffusion
         $D_r$ in the flow's units (used with ``rot_noise``).
+    extra_rate
+        ``extra_rate(n)``: a further angular velocity added to $\boldsymbol w$ at both stages,
+        e.g. the gyrotactic torque (:mod:`swimrl.physics.gyrotaxis`); None: none.
 
     Returns
     -------
@@ -314,12 +318,16 @@ def heun_step_3d(
     q1 = sample(pos)
     v1 = q1[..., 0:3] + swim_speed * n
     w1 = angular_velocity(q1, n, shape_factor)
+    if extra_rate is not None:
+        w1 = w1 + extra_rate(n)
     pos_p = pos + dt * v1
     n_p = rotate(n, dt * w1)
     advance()
     q2 = sample(pos_p)
     v2 = q2[..., 0:3] + swim_speed * n_p
     w2 = angular_velocity(q2, n_p, shape_factor)
+    if extra_rate is not None:
+        w2 = w2 + extra_rate(n_p)
     pos = pos + (0.5 * dt) * (v1 + v2)
     n = rotate(n, (0.5 * dt) * (w1 + w2))
     if rot_noise is not None:

@@ -87,6 +87,10 @@ class RunSpec:
             signal_indices(self.params.signals, names)
         except ConfigError as err:
             raise ConfigError(f"{err} (flow={self.flow.name} is {self.dimension}D)") from None
+        if self.params.bottom_heaviness is not None:
+            require(self.runtime.kernel != "fused", "kernel", self.runtime.kernel,
+                    "'auto', 'eager' or 'compiled' for a gyrotactic swimmer "
+                    "(swimmer.bottom_heaviness set): the fused kernels have no torque")
         kernels = flow_entry(self.flow.name).kernels
         if kernels is not None:
             one_of("kernel", self.runtime.kernel, kernels)
