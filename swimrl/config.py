@@ -45,6 +45,7 @@ from swimrl.physics.body2d import DERIVED_NAMES, SIGNAL_NAMES
 from swimrl.policies.baselines import StrategySpec
 from swimrl.policies.networks import ModelSpec
 from swimrl.policies.optimised import RULE_COEFFS, preset_coefficients, resolve_coefficients
+from swimrl.policies.steering import parse_table
 from swimrl.rl.plan import LossSettings, OptimSettings, TrainConfig, TrainSettings
 from swimrl.runs.spec import EvalSizes, RunSpec
 from swimrl.runtime import Runtime
@@ -212,6 +213,10 @@ def strategy_spec(node: DictConfig, dim: int | None = None) -> StrategySpec:
     if node.name == "minimal":
         return StrategySpec("minimal", coeffs=tuple(_float(node[k]) for k in ("c1", "c2", "c3",
                                                                                "c4")))
+    if node.name == "hand_rule":
+        return StrategySpec("hand_rule", threshold=_float(node.threshold))
+    if node.name == "table":
+        return StrategySpec("table", table=parse_table(node.table))
     if node.name == "optimised":
         if dim is None:
             raise ValueError("strategy=optimised needs the flow's dimension")
@@ -242,6 +247,8 @@ def compare_config(cfg: DictConfig) -> CompareConfig:
         [tuple(_float(x) for x in pair) for pair in c.sto_amplitudes],
         [(str(p), preset_coefficients(str(p), setup.dimension, "compare.optimised_presets"))
          for p in c.optimised_presets],
+        [str(t) for t in (c.tables or [])],
+        _float(c.hand_rule_threshold),
     )
     return from_node(CompareConfig, {"compare.": c, "": cfg}, setup=setup, variants=variants)
 

@@ -250,7 +250,8 @@ def test_strategy_fields_are_those_of_its_yaml(strategy):
     fields of the other strategies."""
     node = _compose("evaluate", f"strategy={strategy}").strategy
     spec = strategy_spec(node)
-    assert defaults(StrategySpec) == {"shape_factor": None, "coeffs": None, "amplitudes": None}
+    assert defaults(StrategySpec) == {"shape_factor": None, "coeffs": None, "amplitudes": None,
+                                      "threshold": None, "table": None}
     assert spec.shape_factor == node.get("shape_factor")
     coeffs = [node.get(k) for k in ("c1", "c2", "c3", "c4")]
     assert spec.coeffs == (None if coeffs[0] is None else tuple(coeffs))

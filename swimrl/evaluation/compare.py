@@ -31,6 +31,7 @@ import torch
 from swimrl.conf_values import yaml_value
 from swimrl.errors import BadFileError, ConfigError, as_bool
 from swimrl.policies.baselines import STRATEGIES, StrategyLabel, StrategySpec
+from swimrl.policies.steering import parse_table
 from swimrl.runs.jobs import EvaluationInterruptedError, Preemption
 from swimrl.runs.policy_files import resolve_policy_file, sha256_file
 from swimrl.runs.records import summary_line, write_json
@@ -92,6 +93,7 @@ class CompareConfig:
         for v in self.variants:
             v.strategy.check_bound(self.setup.params.shape_factor_max)
             v.strategy.check_dimension(self.setup.dimension)
+            v.strategy.check_actuation(self.setup.params.actuation)
         as_bool("compare.shared_flows", self.shared_flows)
         as_bool("overwrite", self.overwrite)
         as_bool("compare.resume", self.resume)
@@ -108,6 +110,8 @@ def strategy_variants(
     sto_amplitudes: Sequence[Sequence[float]] = yaml_value("compare", "compare.sto_amplitudes"),
     optimised_presets: Sequence[tuple[str, Sequence[float]]] = yaml_value(
         "compare", "compare.optimised_presets"),
+    tables: Sequence[str] = yaml_value("compare", "compare.tables"),
+    hand_rule_threshold: float = yaml_value("compare", "compare.hand_rule_threshold"),
 ) -> tuple[Variant, ...]:
     """Variants of ``compare.strategies`` (the keyword defaults: read from ``conf/compare.yaml``):
     ``naive`` expands over ``naive_shape_factors``, ``minimal`` takes the ``minimal``
@@ -116,7 +120,10 @@ def strategy_variants(
     over the pairs ``(a_+, a_-)`` of ``sto_amplitudes`` where given (the energy-aware family,
     :class:`~swimrl.policies.baselines.ShortTimeOptimal`), ``optimised`` over the labelled
     coefficients ``optimised_presets`` (``compare.optimised_presets``: preset names, resolved
-    for the flow's dimension by :func:`~swimrl.policies.optimised.preset_coefficients`)."""
+    for the flow's dimension by :func:`~swimrl.policies.optimised.preset_coefficients`);
+    with ``actuation=steer``, ``hand_rule`` (vorticity edge ``hand_rule_threshold``) and
+    ``table`` over the 12-letter ``tables``
+    (:mod:`~swimrl.policies.steering`)."""
     allowed = "a list of 'naive', 'sto', 'minimal', 'optimised', 'policy'"
     labels = [label for label, _ in minimal_fits]
     if minimal_fits and "minimal" not in strategies:
@@ -156,6 +163,15 @@ def strategy_variants(
             out += [Variant(StrategyLabel("optimised", str(label)).label,
                             StrategySpec("optimised", coeffs=tuple(c)))
                     for label, c in optimised_presets]
+        elif name == "hand_rule":
+            spec = StrategySpec("hand_rule", threshold=float(hand_rule_threshold))
+            out.append(Variant(StrategyLabel("hand_rule").label, spec))
+        elif name == "table":
+            if not tables:
+                raise ConfigError("compare.strategies has 'table' but compare.tables is empty: "
+                                  "allowed a list of 12-letter tables (r, u, l, d)")
+            out += [Variant(StrategyLabel("table", str(t)).label,
+                            StrategySpec("table", table=parse_table(t))) for t in tables]
         elif name == "policy":
             if not policies:
                 raise ConfigError("compare.strategies has 'policy' but compare.policies is empty: "

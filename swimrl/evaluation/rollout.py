@@ -33,6 +33,7 @@ from swimrl.flows.build import FLOW_WORK_BYTES, flow_table_bytes
 from swimrl.flows.dns.flow import StoredRunSpec
 from swimrl.flows.dns.store import store_record
 from swimrl.policies.baselines import StrategySpec, build_strategy
+from swimrl.policies.networks import check_action
 from swimrl.runs.jobs import EvaluationInterruptedError, Preemption
 from swimrl.runs.policy_files import load_policy
 from swimrl.runs.spec import EvalSizes, RunSpec
@@ -66,6 +67,7 @@ class EvalConfig:
             )
         self.strategy.check_bound(self.setup.params.shape_factor_max)
         self.strategy.check_dimension(self.setup.dimension)
+        self.strategy.check_actuation(self.setup.params.actuation)
 
 
 #: Bytes per swimmer of state, observations and integration temporaries (an upper estimate).
@@ -220,6 +222,9 @@ def evaluate_shared(setup: RunSpec, actors: Sequence[Actor], desc: str = "eval",
             spec = env.action_spec_unbatched
             modules = [build_strategy(a, spec) if isinstance(a, StrategySpec) else a
                        for a in actors]
+            for m in modules:  # an actor that knows its action (a policy's) must fit the env's
+                if getattr(m, "action_spec", None) is not None:
+                    check_action(m.action_spec, spec, getattr(m, "source", "the policy"))
             modules = [m.to(setup.runtime.device) for m in modules]
             router = modules[0] if k == 1 else SplitActor(modules, s)
         t0 = time.perf_counter()

@@ -12,8 +12,11 @@ The arrays (:meth:`TrajectoryRecorder.arrays`), with ``F`` flows, ``K`` strategi
 swimmers and ``N`` decisions; lengths in ``l_f``, times in ``tau_K``, signals as in
 :mod:`swimrl.physics.body2d`:
 
-* ``signals`` ``(F, K, n, N, 5)``, ``Lambda`` ``(F, K, n, N)`` (the action, clamped to
-  ``[-Lambda_max, Lambda_max]`` as the environment applies it);
+* ``signals`` ``(F, K, n, N, 5)``, ``Lambda`` ``(F, K, n, N)`` (the shape factor as the
+  environment applies it, :func:`~swimrl.env.actuation.controls`: the action clamped to
+  ``[-Lambda_max, Lambda_max]``, or the shape held by ``actuation=steer``); where the action
+  steers (:mod:`swimrl.actuation`) also ``direction`` ``(F, K, n, N, d)``, the preferred
+  direction ``k_a`` it sets;
 * ``position`` ``(F, K, n, N+1, d)``, ``time`` ``(N+1,)``, and the orientation: in 2D
   ``theta`` ``(F, K, n, N+1)``, in 3D ``orientation`` ``(F, K, n, N+1, 3)`` (the unit vector
   ``n``; the signals are then the seven of :mod:`swimrl.physics.body3d`,
@@ -36,6 +39,7 @@ import numpy as np
 import torch
 from tensordict import TensorDictBase
 
+from swimrl.env.actuation import controls
 from swimrl.physics.body2d import SIGNAL_NAMES
 from swimrl.runs.records import write_npz
 
@@ -63,6 +67,8 @@ class TrajectoryRecorder:
         self._shape = (n_blocks, self.n)
         self._orient = env.body.orientation_name
         self._cur = {"signals": [], "Lambda": [], "position": [], self._orient: []}
+        if env.actuation.steers:
+            self._cur["direction"] = []
         grid = getattr(env.flow, "grid", None)
         self.meta = {"reference_distance": float(env.reference_distance),
                      "tau_K": float(env.tau_k),
@@ -88,10 +94,13 @@ class TrajectoryRecorder:
 
     def __call__(self, i: int, td: TensorDictBase) -> None:
         """Decision ``i``: signals and action (before the step) and the state."""
-        lam_max = self._env.params.shape_factor_max
+        env = self._env
+        lam, direction = controls(env.actuation, td.get("action"), env.params.shape_factor_max,
+                                  env.batch_size, env.dim, env.pos.dtype)
         self._cur["signals"].append(td.get("signals")[:, self._sel].cpu())
-        self._cur["Lambda"].append(
-            td.get("action")[:, self._sel, 0].clamp(-lam_max, lam_max).cpu())
+        self._cur["Lambda"].append(lam.view(env.batch_size)[:, self._sel].cpu())
+        if direction is not None:
+            self._cur["direction"].append(direction[:, self._sel].cpu())
         self._state()
         if self.field_every and i % self.field_every == 0:
             self._field(i)

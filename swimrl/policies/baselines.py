@@ -7,7 +7,9 @@ five of :data:`swimrl.physics.body2d.SIGNAL_NAMES` in 2D, the seven of
 writing ``action`` (the shape factor ``Lambda``, shape ``(..., 1)``) within
 ``[-Lambda_max, Lambda_max]`` (``Lambda_max`` from the environment's action spec):
 
-* naive: ``Lambda = const`` (paper: ``0.98``);
+* naive: ``Lambda = const`` (paper: ``0.98``); where the action steers (``actuation=steer``,
+  ``shape_steer``, :mod:`swimrl.actuation`) the passive gyrotactic swimmer instead, which
+  steers straight up (:class:`NaiveSteer`), the only baseline of a steering action;
 * STO (``eq:sto``): ``Lambda = -Lambda_max sign(n_theta) sign(S_np)`` in 2D,
   ``Lambda = Lambda_max sign(S_np1)`` in 3D (below);
 * minimal model (``eq:fit``):
@@ -40,17 +42,24 @@ from dataclasses import dataclass
 import torch
 from tensordict.nn import TensorDictModule
 from torch import nn
-from torchrl.data import Bounded
+from torchrl.data import Bounded, Categorical
 
+from swimrl.actuation import ActuationSpec
+from swimrl.env.actuation import up_action
 from swimrl.errors import ConfigError, as_float, one_of, require
 from swimrl.flows.labels import parse_ku_name
 from swimrl.physics.body import body, body_of_signals
 from swimrl.physics.body2d import SIGNAL_NAMES
-from swimrl.policies.networks import action_bounds
+from swimrl.policies.networks import action_bounds, action_layout, describe_action
 from swimrl.policies.optimised import RULE_COEFFS, OptimisedRule, check_coefficients
+from swimrl.policies.steering import HandRule, TableStrategy
 
 N_R, N_THETA, S_NN, S_NP, OMEGA = range(len(SIGNAL_NAMES))  # positions in SIGNAL_NAMES
-STRATEGIES = ("naive", "sto", "minimal", "optimised", "policy")
+STRATEGIES = ("naive", "sto", "minimal", "optimised", "policy", "hand_rule", "table")
+#: The baselines that set the shape factor alone (refused where the action steers).
+SHAPE_ONLY = ("sto", "minimal", "optimised")
+#: The baselines that steer alone (:mod:`.steering`; refused where the action is the shape).
+STEER_ONLY = ("hand_rule", "table")
 _LABEL = re.compile(r"(\w+)\((.*)\)", re.DOTALL)
 
 
@@ -70,6 +79,31 @@ class NaiveShape(nn.Module):
 
     def forward(self, signals: torch.Tensor) -> torch.Tensor:
         return torch.full_like(signals[..., :1], self.shape_factor)
+
+
+class NaiveSteer(nn.Module):
+    r"""The naive strategy of a steering action: the passive gyrotactic swimmer, whose
+    preferred direction is the upward vertical $\hat{\boldsymbol z}$ (the last axis: $\hat y$
+    in 2D, $\hat z$ in 3D), at the constant shape factor where the action sets it
+    (:func:`~swimrl.env.actuation.up_action`): the action ``up`` for every swimmer, a vector
+    ``(..., m)`` or (``discrete``) an ``int64`` index ``(...)``.
+
+    Parameters
+    ----------
+    up
+        The action: a list of ``m`` numbers, or an index.
+    """
+
+    def __init__(self, up: list[float] | int):
+        super().__init__()
+        self.index = up if isinstance(up, int) else None
+        self.register_buffer("up", torch.tensor(up if isinstance(up, list) else [0.0]))
+
+    def forward(self, signals: torch.Tensor) -> torch.Tensor:
+        batch = signals.shape[:-1]
+        if self.index is not None:
+            return torch.full(batch, self.index, dtype=torch.int64, device=signals.device)
+        return self.up.to(signals).expand(*batch, -1).clone()
 
 
 class ShortTimeOptimal(nn.Module):
@@ -168,12 +202,19 @@ class StrategySpec:
     amplitudes
         ``sto``: ``(a_+, a_-)``, the prolate and oblate amplitudes (:class:`ShortTimeOptimal`;
         None: both ``Lambda_max``).
+    threshold
+        ``hand_rule``: the vorticity edge $w$ in units of $1/\tau_K$
+        (:class:`~swimrl.policies.steering.HandRule`).
+    table
+        ``table``: twelve action indices (:class:`~swimrl.policies.steering.TableStrategy`).
     """
 
     name: str
     shape_factor: float | None = None
     coeffs: tuple[float, ...] | None = None
     amplitudes: tuple[float, float] | None = None
+    threshold: float | None = None
+    table: tuple[int, ...] | None = None
 
     def __post_init__(self) -> None:
         one_of("strategy.name", self.name, STRATEGIES)
@@ -186,6 +227,13 @@ class StrategySpec:
             require(self.coeffs is not None, "strategy.c1..w", self.coeffs,
                     f"six numbers {list(RULE_COEFFS)}")
             object.__setattr__(self, "coeffs", check_coefficients(self.coeffs))
+        if self.name == "hand_rule":
+            as_float("strategy.threshold", self.threshold, lambda v: v >= 0,
+                     ">= 0 (units 1/tau_K)")
+        if self.name == "table":
+            require(self.table is not None and len(self.table) == 12
+                    and all(a in range(4) for a in self.table), "strategy.table", self.table,
+                    "12 action indices in 0..3")
         if self.amplitudes is not None:
             allowed = "a pair [a_+, a_-] of numbers in [0, 1) (strategy=sto only)"
             pair = tuple(self.amplitudes)
@@ -204,6 +252,19 @@ class StrategySpec:
                               "naive, sto, optimised or policy (the minimal model reads the 2D "
                               f"signals n_theta and S_np; the flow gives {list(names)})")
 
+    def check_actuation(self, actuation: ActuationSpec) -> None:
+        """Where the action steers (``actuation=steer`` or ``shape_steer``) the baselines of
+        the shape factor (``sto``, ``minimal``, ``optimised``) are refused with one line."""
+        if actuation.steers and self.name in SHAPE_ONLY:
+            raise ConfigError(
+                f"strategy={self.name} is invalid with actuation={actuation.name}: allowed naive "
+                f"(the gyrotactic swimmer steering straight up), {', '.join(STEER_ONLY)} or "
+                f"policy ({self.name} sets the shape factor alone; actuation=shape)")
+        if actuation.name != "steer" and self.name in STEER_ONLY:
+            raise ConfigError(
+                f"strategy={self.name} is invalid with actuation={actuation.name}: allowed "
+                f"actuation=steer ({self.name} chooses a direction at a fixed shape)")
+
     def check_bound(self, shape_factor_max: float) -> None:
         """A naive shape factor (STO's amplitudes) must lie within ``[-Lambda_max,
         Lambda_max]``."""
@@ -220,12 +281,18 @@ class StrategySpec:
             )
 
 
-def build_strategy(spec: StrategySpec, action_spec: Bounded) -> TensorDictModule:
+def build_strategy(spec: StrategySpec, action_spec: Bounded | Categorical
+                   ) -> TensorDictModule:
     """Baseline actor for ``spec``; ``Lambda_max`` is the upper bound of the environment's
     (unbatched) action spec. The actor reads the body from the width of the ``signals`` it
     is given (:func:`~swimrl.physics.body.body_of_signals`): the same actor is the 2D STO on
     2D signals and the 3D STO on 3D signals; the minimal model refuses 3D signals with one
-    error.
+    error. A steering action spec (``actuation=steer``, ``shape_steer``; read by
+    :func:`~swimrl.policies.networks.action_layout`, its direction's dimension ``d`` from
+    its width) admits ``naive`` alone: :class:`NaiveSteer`, the vertical being the last of
+    the ``d`` axes (:attr:`~swimrl.physics.body.Body.vertical_axis`), the shape factor (for
+    ``shape_steer``) ``spec.shape_factor``; the others raise one line
+    (:meth:`StrategySpec.check_actuation`).
 
     Parameters
     ----------
@@ -240,6 +307,22 @@ def build_strategy(spec: StrategySpec, action_spec: Bounded) -> TensorDictModule
     TensorDictModule
         ``signals -> action``, the policy of TorchRL's ``env.rollout(n, policy)``.
     """
+    actuation, dim = action_layout(action_spec)
+    if spec.name == "policy":
+        raise ValueError(f"strategy {spec.name!r} is not a baseline (load a policy file instead)")
+    if actuation.steers:
+        try:
+            spec.check_actuation(actuation)
+        except ConfigError as err:
+            raise ConfigError(f"{err} (the action is {describe_action(action_spec)})") from None
+        discrete = actuation.directions == "discrete"
+        if spec.name == "hand_rule":
+            return as_actor(HandRule(spec.threshold, discrete))
+        if spec.name == "table":
+            return as_actor(TableStrategy(spec.table, discrete))
+        up = up_action(actuation, dim, body(dim).vertical_axis, spec.shape_factor)
+        return as_actor(NaiveSteer(up))
+    spec.check_actuation(actuation)
     lam_max = action_bounds(action_spec)[1]
     if spec.name == "naive":
         return as_actor(NaiveShape(spec.shape_factor))
@@ -247,9 +330,7 @@ def build_strategy(spec: StrategySpec, action_spec: Bounded) -> TensorDictModule
         return as_actor(ShortTimeOptimal(lam_max, spec.amplitudes))
     if spec.name == "minimal":
         return as_actor(MinimalModel(spec.coeffs, lam_max))
-    if spec.name == "optimised":
-        return as_actor(OptimisedRule(spec.coeffs, lam_max))
-    raise ValueError(f"strategy {spec.name!r} is not a baseline (load a policy file instead)")
+    return as_actor(OptimisedRule(spec.coeffs, lam_max))
 
 
 @dataclass(frozen=True)

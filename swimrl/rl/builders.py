@@ -75,8 +75,10 @@ def reward_scale_of(env: TransformedEnv) -> float:
 
 
 def make_actor_critic(model: ModelSpec, env: EnvBase, runtime: Runtime):
-    """Actor and critic on the env's observation, the actor bounded by its action spec (the
-    ``TanhNormal``'s ``low``/``high``; :func:`swimrl.policies.networks.actor_critic`)."""
+    """Actor and critic on the env's observation, the actor read from its action spec
+    (``env.action_spec_unbatched``): a ``TanhNormal`` within the ``Bounded`` spec's
+    ``low``/``high`` (the shape factor, a steering vector, or both), or a ``Categorical`` of a
+    discrete one (:func:`swimrl.policies.networks.actor_critic`)."""
     return actor_critic(model, env.observation_spec["observation"].shape[-1],
                         env.action_spec_unbatched, device=runtime.device, dtype=runtime.dtype)
 

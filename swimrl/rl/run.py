@@ -238,8 +238,11 @@ def compare_with_baselines(cfg: TrainConfig, out: Path, seed: int) -> dict:
     Exactly ``swimrl-compare 'compare.strategies=[sto,naive,policy]' compare.policies=[out]
     seed=<eval seed>`` with the run's final-evaluation sizes; writes ``comparison.json`` and
     ``comparison.md`` into the run directory and prints the table (ratios to STO, paired).
+    Where the action steers (``actuation=steer``, ``shape_steer``) there is no STO: naive
+    (the gyrotactic swimmer steering up) and the policy, ratios to naive.
     """
-    settings = {"strategies": ["sto", "naive", "policy"], "naive_shape_factors": [0.98],
+    baselines = ["naive"] if cfg.params.actuation.steers else ["sto", "naive"]
+    settings = {"strategies": [*baselines, "policy"], "naive_shape_factors": [0.98],
                 "policies": [str(out)], "minimal": {"c1": 1.0, "c2": 0.0, "c3": 0.0, "c4": 0.0}}
     record = {**cfg.record, "seed": int(seed), "compare": settings}
     setup = replace(cfg.held_out, seed=int(seed), record=record)

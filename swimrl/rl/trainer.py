@@ -105,7 +105,8 @@ class PPOTrainer:
     def meta(self) -> dict:
         """What a policy file records to rebuild the actor (:func:`policy_meta`)."""
         return policy_meta(self.cfg.params, self.cfg.model,
-                           str(self.dtype).replace("torch.", ""))
+                           str(self.dtype).replace("torch.", ""),
+                           self.env.action_spec_unbatched)
 
     @property
     def finished_training(self) -> bool:
@@ -380,10 +381,15 @@ class PPOTrainer:
                 t_collected = time.perf_counter()
                 done = data["next", "done"].squeeze(-1)
                 r_hat_train = None
-                if bool(done.any()):
+                # task=vertical scores from the env's measuring window of the swimmers now
+                # running (SwimmerEnv.score takes (F, S)): no score of the finished episodes
+                # of a batch; its R_hat is the periodic evaluation's alone
+                if bool(done.any()) and not self.swimmer_env.task.vertical:
                     r_hat_train = float(self.swimmer_env.score(data["next"])[done].mean())
                 lrs = [float(s.get_last_lr()[0]) for s in self.schedulers]
-                action_abs = data["action"].abs().mean()
+                action = data["action"]  # an int64 index for a discrete action
+                action_abs = (action if action.is_floating_point() else action.double()
+                              ).abs().mean()
                 stats = self.update(data)
                 self._stop_if_nonfinite(stats)
                 collector.update_policy_weights_()
@@ -398,6 +404,7 @@ class PPOTrainer:
                         "train/lr_actor": lrs[0],
                         "train/lr_critic": lrs[1],
                         "train/episodes": self.episodes,
+                        # NaN (not logged) for a categorical actor, which has no sigma
                         "policy/std": float(policy_std(self.actor).mean()),
                         "policy/abs_action_mean": float(action_abs),
                         "time/collect_s": t_collected - t_prev,

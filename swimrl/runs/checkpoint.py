@@ -56,7 +56,12 @@ ADDED_KEYS = {
           "optim.lr_scale": "none",  # the rates as given
           "optim.lr_reference_minibatch": 2560,
           "task": {"name": "displacement", "distance": 20.0, "arrival_radius": 1.0},
-          "reward": {"energy_weight": 0.0, "shape_change_weight": 0.0}},
+          "reward": {"energy_weight": 0.0, "shape_change_weight": 0.0},
+          "task.burn_in": 100.0,  # task=vertical's (not read by the others)
+          "swimmer.bottom_heaviness": None,  # no gyrotaxis
+          "swimmer.phi": None,
+          "swimmer.psi": None,
+          "actuation": {"name": "shape", "directions": "continuous", "shape_factor": 0.0}},
     "stochastic": {
         "flow.amplitudes": "stationary",
         "flow.basis": "redrawn",

@@ -14,10 +14,15 @@ containers only. ``SPEC`` is one of
   five signals; ``ku1e+07`` or ``ku10000000`` also find ``ku1e7``).
 
 The result is a deterministic actor (``Lambda = Lambda_max tanh(mu(s))``, the mean of the
-trained Gaussian pushed through the bounding ``tanh``) that reads ``observation`` and writes
-``action``. The policy's signal set (stored in the file) must equal ``signals.names`` of the
-evaluation config, otherwise a :class:`~swimrl.config.ConfigError` names both sets and the
-``signals=...`` choice that matches.
+trained Gaussian pushed through the bounding ``tanh``; for a steering action the same per
+component, or the most probable of the discrete directions) that reads ``observation`` and
+writes ``action``. The policy's signal set (stored in the file) must equal ``signals.names``
+of the evaluation config, otherwise a :class:`~swimrl.config.ConfigError` names both sets and
+the ``signals=...`` choice that matches; likewise its actuation (``actuation.*``) and, given
+the environment's action spec, the action's form (:func:`~swimrl.policies.networks.check_action`:
+a 2D steering policy in a 3D flow is refused with one line). The file records the action spec
+(``action``: ``kind`` ``bounded`` or ``categorical``, ``width``, ``low``, ``high``); a file
+written before records none and is a shape-factor policy.
 """
 
 from __future__ import annotations
@@ -30,7 +35,9 @@ from pathlib import Path
 import torch
 import yaml
 from tensordict.nn import TensorDictModule
+from torchrl.data import Bounded, Categorical
 
+from swimrl.actuation import ActuationSpec
 from swimrl.env import EnvParams
 from swimrl.errors import BadFileError, ConfigError
 from swimrl.flows.labels import parse_ku_name
@@ -40,6 +47,9 @@ from swimrl.policies.networks import (
     NO_STD_BOUND,
     ModelSpec,
     action_spec,
+    action_width,
+    categorical_actor,
+    check_action,
     deterministic_actor,
     tanh_normal_actor,
 )
@@ -97,8 +107,43 @@ def env_params_dict(params: EnvParams) -> dict:
     return out
 
 
-def policy_meta(params: EnvParams, model: ModelSpec, dtype: str) -> dict:
-    """What is needed to rebuild the actor and check it against an evaluation config."""
+def action_record(spec: Bounded | Categorical) -> dict:
+    """The action spec ``spec`` (unbatched) as plain values: ``kind`` (``bounded`` or
+    ``categorical``), ``width`` (components or choices), and for a bounded one ``low`` and
+    ``high`` per component (:func:`action_from_record` rebuilds it)."""
+    if isinstance(spec, Categorical):
+        return {"kind": "categorical", "width": action_width(spec)}
+    m = action_width(spec)
+    return {"kind": "bounded", "width": m,
+            "low": [float(v) for v in spec.space.low.reshape(-1, m)[0]],
+            "high": [float(v) for v in spec.space.high.reshape(-1, m)[0]]}
+
+
+def action_from_record(data: dict, dtype=torch.float32) -> Bounded | Categorical:
+    """The unbatched action spec of a policy file's ``data`` (:func:`action_record`); a file
+    without one is a shape-factor policy, ``[-Lambda_max, Lambda_max]`` of its
+    ``model.shape_factor_max``, as is a bounded width-1 record."""
+    record = data.get("action")
+    if record is None or (record["kind"] == "bounded" and int(record["width"]) == 1):
+        return action_spec(float(data["model"]["shape_factor_max"]), dtype=dtype)
+    if record["kind"] == "categorical":
+        return Categorical(int(record["width"]), shape=(), dtype=torch.int64)
+    low = torch.tensor([float(v) for v in record["low"]], dtype=dtype)
+    high = torch.tensor([float(v) for v in record["high"]], dtype=dtype)
+    return Bounded(low=low, high=high, shape=(int(record["width"]),), dtype=dtype)
+
+
+def policy_meta(params: EnvParams, model: ModelSpec, dtype: str,
+                action: Bounded | Categorical | None = None) -> dict:
+    """What is needed to rebuild the actor and check it against an evaluation config;
+    ``action``: the environment's unbatched action spec (None: the shape factor's of
+    ``params``, the only one known without the flow's dimension; ValueError for a steering
+    ``params.actuation``)."""
+    if action is None:
+        if params.actuation.steers:
+            raise ValueError(f"policy_meta: actuation={params.actuation.name} needs the "
+                             "environment's action spec (action=env.action_spec_unbatched)")
+        action = action_spec(params.shape_factor_max)
     return {
         "signals": list(params.signals),
         "env_params": env_params_dict(params),
@@ -111,6 +156,7 @@ def policy_meta(params: EnvParams, model: ModelSpec, dtype: str) -> dict:
             "shape_factor_max": float(params.shape_factor_max),
             "dtype": str(dtype),
         },
+        "action": action_record(action),
     }
 
 
@@ -205,6 +251,31 @@ def check_signals(spec: str, trained: list[str], signals: tuple[str, ...]) -> No
         )
 
 
+def trained_actuation(data: dict) -> ActuationSpec:
+    """The actuation a policy file's ``data`` was trained with (``env_params.actuation``;
+    ``shape`` for a file written before actuations existed)."""
+    saved = data.get("env_params", {}).get("actuation") or {}
+    return ActuationSpec(**{k: saved[k] for k in ("name", "directions") if k in saved})
+
+
+def actuation_choice(actuation: ActuationSpec) -> str:
+    """``actuation=NAME`` (and ``actuation.directions=discrete`` where so)."""
+    text = f"actuation={actuation.name}"
+    if actuation.steers and actuation.directions == "discrete":
+        text += " actuation.directions=discrete"
+    return text
+
+
+def check_actuation(spec: str, data: dict, actuation: ActuationSpec) -> None:
+    """Raise a one-line ConfigError if the policy (file content ``data``) was trained with
+    another actuation (name, or steering directions) than ``actuation``."""
+    trained = trained_actuation(data)
+    have, want = actuation_choice(trained), actuation_choice(actuation)
+    if have != want:
+        raise ConfigError(f"{want} does not match policy={spec!r}, which was trained with "
+                          f"{have}: evaluate it with {have}")
+
+
 def initial_actor_weights(spec: str, params: EnvParams, model) -> tuple[Path, dict]:
     """The file and actor weights of ``train.init_policy=spec`` (a warm start), checked
     against the run: the same signals (``params.signals``) and the same network
@@ -217,6 +288,7 @@ def initial_actor_weights(spec: str, params: EnvParams, model) -> tuple[Path, di
     data = load_file(path, map_location="cpu")
     try:
         check_signals(spec, data["signals"], params.signals)
+        check_actuation(spec, data, params.actuation)
     except ConfigError as err:
         raise ConfigError(f"train.init_policy: {err}") from None
     saved = data["model"]
@@ -230,9 +302,11 @@ def initial_actor_weights(spec: str, params: EnvParams, model) -> tuple[Path, di
     return path, data["actor"]
 
 
-def load_policy(spec: str, params: EnvParams) -> TensorDictModule:
+def load_policy(spec: str, params: EnvParams,
+                action: Bounded | Categorical | None = None) -> TensorDictModule:
     """Deterministic actor ``observation -> action`` of the policy named by ``spec``, checked
-    against the evaluation's signals ``params.signals``. The actor keeps the bound
+    against the evaluation's signals ``params.signals`` and actuation ``params.actuation``
+    (and, where given, the environment's action spec ``action``). The actor keeps the bound
     ``Lambda_max`` it was trained with (the environment clamps to its own).
 
     Parameters
@@ -244,13 +318,19 @@ def load_policy(spec: str, params: EnvParams) -> TensorDictModule:
     params
         The environment's parameters: its ``signals`` must be those the policy was trained
         on (else a one-line :class:`~swimrl.errors.ConfigError` naming the right
-        ``signals=`` choice).
+        ``signals=`` choice), its ``actuation`` the policy's (else one line naming it).
+    action
+        The environment's ``action_spec_unbatched`` (None: not checked here; an evaluation
+        checks it, :func:`~swimrl.policies.networks.check_action`): a one-line
+        ConfigError where the policy acts otherwise (e.g. trained in a 2D flow, evaluated in
+        a 3D one).
 
     Returns
     -------
     TensorDictModule
-        The actor's mean, ``tanh``-bounded, in evaluation mode without gradients: the policy
-        of TorchRL's ``env.rollout(n, policy)``.
+        The actor's mean, ``tanh``-bounded (a discrete action: its most probable choice), in
+        evaluation mode without gradients: the policy of TorchRL's ``env.rollout(n,
+        policy)``. Its ``action_spec`` is the action spec it was trained with.
 
     Raises
     ------
@@ -260,18 +340,22 @@ def load_policy(spec: str, params: EnvParams) -> TensorDictModule:
     path = resolve_policy_file(spec)
     data = load_file(path, map_location="cpu")
     check_signals(spec, data["signals"], params.signals)
+    check_actuation(spec, data, params.actuation)
     model = data["model"]
     dtype = getattr(torch, str(model.get("dtype", "float32")))
-    actor = tanh_normal_actor(
-        int(model["n_obs"]),
-        action_spec(float(model["shape_factor_max"]), dtype=dtype),
-        hidden=[int(h) for h in model["hidden"]],
-        activation=str(model["activation"]),
-        init_std=float(model.get("init_std", 1.0)),
-        min_std=float(model.get("min_std", NO_STD_BOUND)),
-        dtype=dtype,
-    )
+    trained = action_from_record(data, dtype)
+    if action is not None:
+        check_action(trained, action, f"policy={spec!r}")
+    shape = {"hidden": [int(h) for h in model["hidden"]],
+             "activation": str(model["activation"]), "dtype": dtype}
+    if isinstance(trained, Categorical):
+        actor = categorical_actor(int(model["n_obs"]), trained, **shape)
+    else:
+        actor = tanh_normal_actor(int(model["n_obs"]), trained,
+                                  init_std=float(model.get("init_std", 1.0)),
+                                  min_std=float(model.get("min_std", NO_STD_BOUND)), **shape)
     actor.load_state_dict(data["actor"])
     actor.requires_grad_(False)
     policy = deterministic_actor(actor)
+    policy.source = f"policy={spec!r}"
     return policy.eval()

@@ -101,17 +101,27 @@ def flatten(d: dict, prefix: str = "") -> dict:
     return out
 
 
+def score_name(config: dict) -> str:
+    """The printed name of a record's score: ``<v_z>/v_s`` for ``task=vertical``, else
+    ``R_hat`` (the key in the records is ``R_hat_*`` for every task)."""
+    vertical = (config.get("task") or {}).get("name") == "vertical"
+    return "<v_z>/v_s" if vertical else "R_hat"
+
+
 def summary_line(m: dict) -> str:
-    """One line: strategy, flow, R_hat +- SEM, size, time and speed."""
+    """One line: strategy, flow, the score (R_hat or <v_z>/v_s) +- SEM, size, time and
+    speed."""
     return (
         f"{m['strategy']} {ku_display(m['config']['flow'], '=')}: "
-        f"R_hat = {m['R_hat_mean']:.4f} +- "
+        f"{score_name(m['config'])} = {m['R_hat_mean']:.4f} +- "
         f"{m['R_hat_sem']:.4f} (SEM; std over flows {m['R_hat_std']:.4f}) over {m['n_flows']} "
         f"flows x {m['n_swimmers']} swimmers; {m['wall_s']:.1f} s, "
         f"{m['swimmer_substeps_per_s']:.3g} swimmer-substeps/s"
         + (f"; E_hat = {m['energy_mean']:.4f}" if "energy_mean" in m else "")
         + (f"; arrived {m['arrival_mean']:.4f} +- {m['arrival_sem']:.4f}"
            if "arrival_mean" in m else "")
+        + (f"; trapped {m['trapped_mean']:.4f} +- {m['trapped_sem']:.4f}"
+           if "trapped_mean" in m else "")
     )
 
 
@@ -123,7 +133,8 @@ def comparison_markdown(record: dict) -> str:
     if record.get("task") == "target":
         title = (f"target at {record['target_distance']:g} ell_f, arrival radius "
                  f"{record['arrival_radius']:g} ell_f; " + title)
-    head = ["strategy", "R_hat (mean +- SEM)", "std over flows", f"ratio to {first} (paired)"]
+    head = ["strategy", f"{score_name(record['config'])} (mean +- SEM)", "std over flows",
+            f"ratio to {first} (paired)"]
     rows = [[r["label"], f"{r['R_hat_mean']:.4f} +- {r['R_hat_sem']:.4f}",
              f"{r['R_hat_std']:.4f}", f"{r['ratio_to_first']:.3f} +- {r['ratio_sem']:.3f}"]
             for r in record["rows"]]
