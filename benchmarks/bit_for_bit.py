@@ -194,6 +194,9 @@ def main(argv: list[str] | None = None) -> int:
         base = work / "base"
         subprocess.run(["git", "worktree", "add", "-q", "--detach", str(base), args.base],
                        cwd=ROOT, check=True)
+        # the base tree's own configs: swimrl.conf is the top-level conf/ (an editable install
+        # maps it to this checkout's), so the base's is linked where its package finds it first
+        (base / "swimrl" / "conf").symlink_to(base / "conf", target_is_directory=True)
         try:
             print(f"base {args.base} ({base}) against {ROOT}", flush=True)
             if "evaluations" not in args.skip:

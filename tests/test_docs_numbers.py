@@ -331,3 +331,16 @@ def test_no_table_cites_outputs_instead_of_a_record():
     text = page(RESULTS_MD)
     assert "smart_ku_sweep/ku0.1/comparison.md" in text
     assert "full tables in `comparison.md` of each run" not in text
+
+
+def test_gyrotaxis_trapping_table_is_the_record():
+    """docs/beyond/gyrotaxis.md's trapping map: each cell's trapped fraction and <v_z>/v_s
+    (the page's minus sign) and the condition's mark, from trapping.json."""
+    text = page("docs/beyond/gyrotaxis.md")
+    points = record("gyrotaxis/trapping/trapping.json")["points"]
+    for phi in sorted({p["phi"] for p in points}):
+        cells = []
+        for p in sorted((p for p in points if p["phi"] == phi), key=lambda p: p["psi"]):
+            vz = f"{p['vertical_velocity']:+.2f}".replace("-", MINUS)
+            cells.append(f"{p['trapped']:.2f} ({vz})" + (" T" if p["predicted"] else ""))
+        assert f"| {phi:g} | " + " | ".join(cells) + " |" in text, phi

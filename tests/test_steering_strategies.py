@@ -88,8 +88,29 @@ def test_trapping_command_tiny(tmp_path):
 def test_table_search_command_tiny(tmp_path):
     out = _cli("swimrl.cli.table_search", ["table_search.n_swimmers=4",
                                            "table_search.n_random_starts=0",
+                                           "table_search.starts=[uuuuuuuuuuuu]",
                                            "table_search.max_sweeps=1", "episode.duration=2",
                                            "task.burn_in=1"], tmp_path)
     assert out.returncode == 0, out.stderr[-2000:]
     rec = json.loads((tmp_path / "table_search.json").read_text())
     assert len(rec["best_table"]) == 12 and rec["evaluations"] == 1 + 48
+
+
+def test_gyrotaxis_figures_from_the_committed_records(tmp_path):
+    """The figure script on the committed records: the policy map of a continuous and a
+    discrete steering policy (the discrete one constant on each of the 12 states), the
+    trajectories."""
+    import numpy as np
+
+    from swimrl.analysis.gyrotaxis_figures import direction_map, main
+
+    runs = ROOT / "docs/results/gyrotaxis/ppo"
+    phi = np.radians([0.0, 10.0, 30.0, 170.0])
+    m = direction_map(str(runs / "disc_psi1_seed0"), phi, np.array([0.0, 0.1, 1.5]))
+    assert set(np.round(np.degrees(m).ravel()).tolist()) <= {0.0, 90.0, -90.0, 180.0, -180.0}
+    assert m[0, 0] == m[0, 1] == m[1, 2]        # one state (|omega| small, heading up)
+    traj = ROOT / "docs/results/gyrotaxis/trajectories"
+    main(["policy-map", str(tmp_path / "map.png"), str(runs / "cont_psi1_seed0")])
+    main(["trajectories", str(tmp_path / "t.png"), "--until", "5",
+          f"naive={traj / 'naive/trajectories.npz'}"])
+    assert (tmp_path / "map.png").stat().st_size > 0 and (tmp_path / "t.png").stat().st_size > 0

@@ -69,13 +69,14 @@ class SearchResult:
 
 def coordinate_ascent(params: EnvParams, n_swimmers: int, seed: int, runtime: Runtime,
                       n_random_starts: int = 3, max_sweeps: int = 4, tol: float = 1e-3,
-                      search_seed: int = 0,
+                      search_seed: int = 0, starts: Sequence[Sequence[int]] = (NAIVE_TABLE,),
                       progress: Callable[[str], None] | None = None) -> SearchResult:
-    """Coordinate ascent (module docstring) from the naive table and ``n_random_starts``
-    random tables (drawn from ``search_seed``)."""
+    """Coordinate ascent (module docstring) from the tables ``starts`` (the naive one by
+    default) and ``n_random_starts`` random tables (drawn from ``search_seed``)."""
     gen = torch.Generator().manual_seed(search_seed)
-    starts = [NAIVE_TABLE] + [tuple(torch.randint(0, 4, (12,), generator=gen).tolist())
-                              for _ in range(n_random_starts)]
+    starts = [tuple(t) for t in starts] + [
+        tuple(torch.randint(0, 4, (12,), generator=gen).tolist())
+        for _ in range(n_random_starts)]
     runs, evaluations = [], 0
     for k, table in enumerate(starts):
         table = list(table)

@@ -19,7 +19,7 @@ from swimrl.analysis.table_search import coordinate_ascent
 from swimrl.cli import command, run_dir
 from swimrl.config import env_params, record_of, runtime
 from swimrl.errors import as_float, as_int, require
-from swimrl.policies.steering import table_text
+from swimrl.policies.steering import parse_table, table_text
 from swimrl.runs.records import refuse_overwrite, write_json
 
 log = logging.getLogger(__name__)
@@ -39,7 +39,8 @@ def check(cfg: DictConfig, out: Path | None) -> dict:
          "n_random_starts": as_int("table_search.n_random_starts", t.n_random_starts, low=0),
          "max_sweeps": as_int("table_search.max_sweeps", t.max_sweeps, low=1),
          "tol": as_float("table_search.tol", t.tol, lambda v: v >= 0, ">= 0"),
-         "search_seed": as_int("table_search.search_seed", t.search_seed, low=0)}
+         "search_seed": as_int("table_search.search_seed", t.search_seed, low=0),
+         "starts": [parse_table(x) for x in t.starts]}
     if out is not None:
         refuse_overwrite(Path(out) / RECORD, bool(cfg.overwrite))
     return c
@@ -53,7 +54,7 @@ def main(cfg: DictConfig) -> dict:
     rt.apply()
     res = coordinate_ascent(c["params"], c["n_swimmers"], int(cfg.seed), rt,
                             c["n_random_starts"], c["max_sweeps"], c["tol"], c["search_seed"],
-                            log.info)
+                            c["starts"], log.info)
     for r in res.starts:
         r["table_text"] = table_text(r["table"])
         r["start_text"] = table_text(r["start"])
