@@ -344,3 +344,30 @@ def test_gyrotaxis_trapping_table_is_the_record():
             vz = f"{p['vertical_velocity']:+.2f}".replace("-", MINUS)
             cells.append(f"{p['trapped']:.2f} ({vz})" + (" T" if p["predicted"] else ""))
         assert f"| {phi:g} | " + " | ".join(cells) + " |" in text, phi
+
+
+def test_gyrotaxis_comparison_rows_are_the_records():
+    """docs/beyond/gyrotaxis.md's Φ = 0.3, Ψ = 1 table: means, SEMs, the paired difference to
+    the searched table and the trapped fraction, from the two comparison.json records."""
+    text = page("docs/beyond/gyrotaxis.md")
+    table = "table(dduldurudrrd)"
+    for kind, rows_of in (("continuous", {"hand_rule": "hand rule",
+                                          "policy(docs/results/gyrotaxis/ppo/cont_psi1_seed0)":
+                                          "PPO continuous, seed 0",
+                                          "policy(docs/results/gyrotaxis/ppo/cont_psi1_seed1)":
+                                          "PPO continuous, seed 1",
+                                          "policy(docs/results/gyrotaxis/ppo/cont_psi1_seed2)":
+                                          "PPO continuous, seed 2"}),
+                          ("discrete", {"policy(docs/results/gyrotaxis/ppo/disc_psi1_seed0)":
+                                        "PPO 12 states, seeds 0, 1, 2"})):
+        got = rows(f"gyrotaxis/compare_psi1_{kind}/comparison.json")
+        ref = np.asarray(got[table]["per_flow"])
+        for label, name in rows_of.items():
+            r = got[label]
+            d = np.asarray(r["per_flow"]) - ref
+            sem = d.std(ddof=1) / np.sqrt(len(d))
+            diff = f"{d.mean():+.3f} ± {sem:.3f}".replace("-", MINUS)
+            each = " (each)" if "seeds" in name else ""
+            cells = (f"| {name} | {r['R_hat_mean']:.3f} ± {r['R_hat_sem']:.3f}{each} | {diff} | "
+                     f"{r['trapped_mean']:.2f} |")
+            assert cells in text, cells

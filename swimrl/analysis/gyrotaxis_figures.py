@@ -40,7 +40,7 @@ def plot_trajectories(records: list[tuple[str, Path]], out: Path, max_swimmers: 
     """One panel per ``(label, trajectories.npz)``: the first ``max_swimmers`` recorded
     swimmers of the first flow over the Taylor-Green streamlines (amplitude and wavenumber
     from the record's config), from the start to ``until`` ($\tau_K$); each panel's title
-    gives their $\langle v_z\rangle/v_s$ over the whole episode's window."""
+    gives their $\\langle v_z\rangle/v_s$ over the whole episode's window."""
     plt = pyplot()
     fig, axes = plt.subplots(1, len(records), figsize=(3.6 * len(records), 4.6), squeeze=False)
     for ax, (label, path) in zip(axes[0], records, strict=True):

@@ -51,9 +51,12 @@ def plot_training_curves(
     tag: str = "eval/R_hat",
     references: dict[str, float] | None = None,
     title: str | None = None,
+    ylabel: str | None = None,
 ) -> dict[str, tuple[np.ndarray, np.ndarray]]:
     """``tag`` against frames for each labelled run (+- SEM band for ``eval/R_hat``) and
-    horizontal reference lines; returns ``{label: (frames, values)}`` of what was drawn."""
+    horizontal reference lines; ``ylabel`` (default: held-out R_hat, or the tag) names the
+    task's score (``task=vertical``: ``<v_z>/v_s``); returns ``{label: (frames, values)}`` of
+    what was drawn."""
     plt = pyplot()
     fig, ax = plt.subplots(figsize=(6, 4))
     drawn = {}
@@ -62,7 +65,7 @@ def plot_training_curves(
     for i, (label, value) in enumerate((references or {}).items()):
         ax.axhline(value, color=f"C{len(runs) + i}", ls="--", lw=1, label=label)
     ax.set_xlabel("training frames (millions of decisions)")
-    ax.set_ylabel(r"held-out $\hat R$" if tag == "eval/R_hat" else tag)
+    ax.set_ylabel(ylabel or (r"held-out $\hat R$" if tag == "eval/R_hat" else tag))
     if title:
         ax.set_title(title, fontsize=9)
     ax.legend(fontsize=8)
@@ -91,10 +94,11 @@ def main(argv: list[str] | None = None) -> None:
     ap.add_argument("--tag", default="eval/R_hat")
     ap.add_argument("--reference", nargs="*", default=[], help="LABEL=VALUE")
     ap.add_argument("--title", default=None)
+    ap.add_argument("--ylabel", default=None, help="the y axis' label (default: the tag's)")
     args = ap.parse_args(argv)
     runs = {k: Path(v) for k, v in _pairs(args.runs, "run").items()}
     refs = {k: float(v) for k, v in _pairs(args.reference, "--reference").items()}
-    plot_training_curves(runs, args.out, args.tag, refs, args.title)
+    plot_training_curves(runs, args.out, args.tag, refs, args.title, args.ylabel)
     print(args.out)
 
 

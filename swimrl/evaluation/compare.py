@@ -48,7 +48,8 @@ ROW_OUTCOMES = ("energy_mean", "energy_sem", "energy_std", "energy_per_flow",
                 "final_distance_sem", "final_distance_std", "final_distance_per_flow",
                 "arrival_time_mean", "arrival_time_median", "n_arrived", "arrival_cdf_t",
                 "arrival_cdf_mean", "arrival_cdf_sem", "arrival_time_rmst_mean",
-                "arrival_time_rmst_sem", "arrival_time_half", "arrival_time_quartile")
+                "arrival_time_rmst_sem", "arrival_time_half", "arrival_time_quartile",
+                "trapped_mean", "trapped_sem", "trapped_std", "trapped_per_flow")
 
 #: Config keys that do not change a comparison's results (left out of a partial's identity).
 NOT_IDENTITY = (("overwrite",), ("threads",), ("eval", "progress"), ("compare", "resume"))

@@ -146,6 +146,10 @@ def comparison_markdown(record: dict) -> str:
         head.append("C_hat (mean +- SEM)")
         for row, r in zip(rows, record["rows"], strict=True):
             row.append(f"{r['shape_change_mean']:.4f} +- {r['shape_change_sem']:.4f}")
+    if all("trapped_mean" in r for r in record["rows"]):
+        head.append("trapped (mean +- SEM)")
+        for row, r in zip(rows, record["rows"], strict=True):
+            row.append(f"{r['trapped_mean']:.4f} +- {r['trapped_sem']:.4f}")
     if all("arrival_mean" in r for r in record["rows"]):
         head += ["arrived (mean +- SEM)", f"arrived - {first} (paired)",
                  "arrival time mean / median of the arrived (tau_K)", "final distance (ell_f)"]
