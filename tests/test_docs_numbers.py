@@ -371,3 +371,22 @@ def test_gyrotaxis_comparison_rows_are_the_records():
             cells = (f"| {name} | {r['R_hat_mean']:.3f} ± {r['R_hat_sem']:.3f}{each} | {diff} | "
                      f"{r['trapped_mean']:.2f} |")
             assert cells in text, cells
+
+
+def test_gyrotaxis_stochastic_rows_are_the_records():
+    """docs/beyond/gyrotaxis.md's table in the stochastic flow, from its two records."""
+    text = page("docs/beyond/gyrotaxis.md")
+    names = {("shape", "naive(+0.00)"): "naive sphere (Λ = 0, k = up)",
+             ("shape", "naive(-0.98)"): "naive, Λ = −0.98 (oblate)",
+             ("shape", "naive(+0.98)"): "naive, Λ = +0.98 (prolate)",
+             ("shape", "sto"): "STO in the vertical frame",
+             ("shape", "policy(docs/results/gyrotaxis/ppo/stochastic_shape_seed0)"):
+                 "PPO, shape only",
+             ("steer", "hand_rule"): "hand rule (steering)",
+             ("steer", "policy(docs/results/gyrotaxis/ppo/stochastic_steer_seed0)"):
+                 "PPO, steering"}
+    for (kind, label), name in names.items():
+        r = rows(f"gyrotaxis/compare_stochastic_{kind}/comparison.json")[label]
+        cells = (f"| {name} | {r['R_hat_mean']:.3f} ± {r['R_hat_sem']:.3f} | "
+                 f"{r['trapped_mean']:.2f} |")
+        assert cells in text, cells
