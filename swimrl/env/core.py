@@ -260,8 +260,9 @@ class SwimmerEnv(EnvBase):
         return self.body.signals(q.view(*self.batch_size, self.body.n_channels),
                                  self.orientation, self.frame(displacement), self.tau_k)
 
-    def _observe(self) -> TensorDict:
-        disp = self.displacement()
+    def _observe(self, disp: torch.Tensor | None = None) -> TensorDict:
+        if disp is None:  # x - x_0, unless the step computed it already
+            disp = self.displacement()
         sig = self.signals(disp)
         ended = (self.flow_step >= self.params.n_decisions).unsqueeze(1)
         truncated = ended.expand(self.batch_size).unsqueeze(-1)
@@ -409,7 +410,7 @@ class SwimmerEnv(EnvBase):
         after = self._progress(disp)
         if self.task.vertical:
             self.window.update(after, self.step_count)
-        out = self._observe()
+        out = self._observe(disp)
         reward = after - before
         out.set("reward", (reward if cost is None else reward - cost).unsqueeze(-1))
         return out
