@@ -41,7 +41,7 @@ from swimrl.flows.dns.run import DNSRun
 from swimrl.flows.labels import ku_name
 from swimrl.flows.registry import flow_dimension, flow_entry, flow_names
 from swimrl.physics.body import body
-from swimrl.physics.body2d import DERIVED_NAMES, SIGNAL_NAMES
+from swimrl.physics.body2d import DERIVED_NAMES, RULE_TERM_NAMES, SIGNAL_NAMES
 from swimrl.policies.baselines import StrategySpec
 from swimrl.policies.networks import ModelSpec
 from swimrl.policies.optimised import RULE_COEFFS, preset_coefficients, resolve_coefficients
@@ -87,6 +87,16 @@ def all_invariant_signals(flow) -> list[str]:
 
 
 OmegaConf.register_new_resolver("all_invariant_signals", all_invariant_signals, replace=True)
+
+
+def rule_term_signals(flow) -> list[str]:
+    """``${rule_term_signals:${flow}}`` (``conf/signals/rule_terms.yaml``): the set of
+    :func:`all_invariant_signals` and the optimised rule's STO and stabilising terms
+    (:data:`~swimrl.physics.body2d.RULE_TERM_NAMES`)."""
+    return [*all_invariant_signals(flow), *RULE_TERM_NAMES]
+
+
+OmegaConf.register_new_resolver("rule_term_signals", rule_term_signals, replace=True)
 
 
 def _int(value):

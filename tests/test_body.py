@@ -114,8 +114,15 @@ def test_derived_signals_are_the_tumbling_quantities_and_agree_in_the_plane():
     perp = sn - (n * sn).sum(-1, keepdim=True) * n
     want = torch.stack((perp.norm(dim=-1), (n * torch.linalg.cross(omega, sn, dim=-1)).sum(-1)),
                        -1)
-    torch.testing.assert_close(body(3).derived(g.signals), want, rtol=0, atol=1e-12)
-    assert body(2).derived_names[:2] == body(3).derived_names == ("lever", "torque")
+    got = body(3).derived(g.signals)
+    torch.testing.assert_close(got[..., :2], want, rtol=0, atol=1e-12)
+    assert body(2).derived_names[:2] == body(3).derived_names[:2] == ("lever", "torque")
+    # the rule's terms: the STO term |(I - nn) e_r| sign(S_np1) and torque / lever
+    e_r = g.e_r.reshape(3).to(torch.float64)
+    side = (e_r - (n @ e_r).unsqueeze(-1) * n).norm(dim=-1) * torch.sign(g.signals[:, 2])
+    torch.testing.assert_close(got[..., 2], side, rtol=0, atol=1e-12)
+    torch.testing.assert_close(got[..., 3] * want[:, 0], want[:, 1], rtol=0, atol=1e-12)
+    assert body(3).derived_names[2:] == body(2).derived_names[-2:] == ("sto_term", "stab_term")
     g2 = gaussian_states(2, 500, seed=3)
     theta = g2.orientation
     q3 = torch.zeros(500, 11, dtype=torch.float64)
@@ -124,7 +131,8 @@ def test_derived_signals_are_the_tumbling_quantities_and_agree_in_the_plane():
     n3 = torch.stack((theta.cos(), theta.sin(), 0 * theta), -1)
     e_r = torch.tensor([1.0, 0.0, 0.0], dtype=torch.float64).expand(500, 3)
     sig3 = body(3).signals(q3, n3, e_r, 1.0)
-    torch.testing.assert_close(body(3).derived(sig3), body(2).derived(g2.signals)[..., :2],
+    d2 = body(2).derived(g2.signals)
+    torch.testing.assert_close(body(3).derived(sig3), torch.cat((d2[..., :2], d2[..., -2:]), -1),
                                rtol=0, atol=1e-12)
 
 
@@ -136,7 +144,7 @@ def test_an_env_observes_derived_signals():
     obs, sig = td["observation"], td["signals"]
     assert obs.shape == (1, 8, 10)
     assert torch.equal(obs[..., :7], sig)
-    assert torch.equal(obs[..., 7:9], body(3).derived(sig))
+    assert torch.equal(obs[..., 7:9], body(3).derived(sig)[..., :2])
     assert torch.equal(obs[..., 9], torch.zeros(1, 8))
     with pytest.raises(ConfigError, match="unknown"):
         EnvParams(**SHORT, signals=("n_r", "lever2"))

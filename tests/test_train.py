@@ -780,3 +780,16 @@ def test_a_3d_policy_trains_and_evaluates_on_the_invariant_signals(compose_cfg, 
                                   "eval.n_swimmers=4", "eval.progress=false", "threads=1"]))
     out = evaluate(ev.setup, actor_for(ev.strategy, ev.policy, ev.setup.params), "policy")
     assert math.isfinite(out["R_hat_mean"])
+
+
+@pytest.mark.parametrize("flow, first", [("flow=stochastic", ["n_r", "n_theta"]),
+                                         ("flow=stochastic3d", ["n_r", "S_nn"])])
+def test_rule_terms_signal_set_adds_the_rules_terms(compose_cfg, flow, first):
+    """``signals=rule_terms``: the flow's signals, ``lever``, ``torque`` and the optimised
+    rule's two terms, which an env of either dimension observes."""
+    cfg = compose_cfg([flow, "signals=rule_terms"], name="train")
+    names = list(cfg.signals.names)
+    assert names[:2] == first and names[-4:] == ["lever", "torque", "sto_term", "stab_term"]
+    from swimrl.physics.body import body, observable_names
+    dim = 3 if "3d" in flow else 2
+    assert set(names) <= set(observable_names(body(dim)))

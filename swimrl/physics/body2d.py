@@ -40,6 +40,13 @@ SIGNAL_NAMES: tuple[str, ...] = ("n_r", "n_theta", "S_nn", "S_np", "omega")
 #: (:mod:`swimrl.physics.tumbling`); observable with ``signals.names`` (``signals=invariant``).
 DERIVED_NAMES: tuple[str, ...] = ("lever", "torque")
 
+#: The two frame-invariant terms of the optimised rule (``docs/physics.md``, "Optimised
+#: rules"), the same in 2D and 3D: the STO term $\sqrt{1 - n_r^2}\,\mathrm{sign}\,S_{np_1}$
+#: ($-n_\theta\,\mathrm{sign}\,S_{np}$ in the plane) and the stabilising term
+#: $\mathrm{torque}/\mathrm{lever}$ ($-\omega\tau_K\,\mathrm{sign}\,S_{np}$ in the plane;
+#: 0 where the lever vanishes); observable with ``signals=rule_terms``.
+RULE_TERM_NAMES: tuple[str, ...] = ("sto_term", "stab_term")
+
 #: Colabrese et al.'s (2017) twelve states, one-hot (:func:`twelve_states`).
 STATE12_NAMES: tuple[str, ...] = tuple(f"state12_{i}" for i in range(12))
 
@@ -133,7 +140,7 @@ class Body2D:
     n_channels = 5
     signal_names = SIGNAL_NAMES
     #: Frame-invariant signals and the twelve states computed from the five (:meth:`derived`).
-    derived_names = DERIVED_NAMES + STATE12_NAMES
+    derived_names = DERIVED_NAMES + STATE12_NAMES + RULE_TERM_NAMES
     #: A further rate of the orientation (None; a gyrotactic body's torque,
     #: :class:`~swimrl.physics.gyrotaxis.GyrotacticBody`).
     extra_rate = None
@@ -157,10 +164,12 @@ class Body2D:
         $\boldsymbol n\cdot(\boldsymbol\omega\times\mathbb S\boldsymbol n)\tau_K^2
         = -\omega S_{np}\tau_K^2$ (in the plane, $\boldsymbol\omega = \omega\hat z$), the 3D
         :meth:`Body3D.derived <swimrl.physics.body3d.Body3D.derived>` in the plane; then the
-        twelve one-hot states (:func:`twelve_states`), ``(..., 14)``."""
+        twelve one-hot states (:func:`twelve_states`); then the rule's STO and stabilising
+        terms (:meth:`invariant_terms`), ``(..., 16)``."""
         s_np = signals[..., 3]
+        _, sto, stab, _ = self.invariant_terms(signals)
         return torch.cat((torch.stack((s_np.abs(), -signals[..., 4] * s_np), -1),
-                          twelve_states(signals)), -1)
+                          twelve_states(signals), torch.stack((sto, stab), -1)), -1)
 
     def sto_sign(self, signals: torch.Tensor) -> torch.Tensor:
         r"""$\sigma = -\mathrm{sign}(n_\theta)\,\mathrm{sign}(S_{np})$: STO is

@@ -62,6 +62,9 @@ SIGNAL_NAMES_3D: tuple[str, ...] = (
 #: (:data:`swimrl.physics.body2d.DERIVED_NAMES`).
 DERIVED_NAMES: tuple[str, ...] = ("lever", "torque")
 
+#: The rule's STO and stabilising terms (:data:`swimrl.physics.body2d.RULE_TERM_NAMES`).
+RULE_TERM_NAMES: tuple[str, ...] = ("sto_term", "stab_term")
+
 
 def radial_direction(n: torch.Tensor, displacement: torch.Tensor) -> torch.Tensor:
     r"""$\boldsymbol e_r = \boldsymbol d/|\boldsymbol d|$, and $\boldsymbol n$ where
@@ -156,7 +159,7 @@ class Body3D:
     n_channels = 11
     signal_names = SIGNAL_NAMES_3D
     #: Frame-invariant signals computed from the seven (:meth:`derived`).
-    derived_names = DERIVED_NAMES
+    derived_names = DERIVED_NAMES + RULE_TERM_NAMES
     #: A further rate of the orientation (None; a gyrotactic body's torque,
     #: :class:`~swimrl.physics.gyrotaxis.GyrotacticBody`).
     extra_rate = None
@@ -179,11 +182,13 @@ class Body3D:
         r"""The lever $|(\mathbb I - \boldsymbol n\boldsymbol n)\mathbb S\boldsymbol n|\tau_K
         = (S_{np_1}^2 + S_{np_2}^2)^{1/2}$ and the torque
         $\boldsymbol n\cdot(\boldsymbol\omega\times\mathbb S\boldsymbol n)\tau_K^2
-        = S_{np_2}\omega_{p_1} - S_{np_1}\omega_{p_2}$, ``(..., 2)``: both independent of the
-        frame's rotation about $\boldsymbol n$."""
+        = S_{np_2}\omega_{p_1} - S_{np_1}\omega_{p_2}$, then the rule's STO and stabilising
+        terms (:meth:`invariant_terms`), ``(..., 4)``: all independent of the frame's rotation
+        about $\boldsymbol n$."""
         s1, s2 = signals[..., 2], signals[..., 3]
+        _, sto, stab, _ = self.invariant_terms(signals)
         return torch.stack((torch.sqrt(s1 * s1 + s2 * s2),
-                            s2 * signals[..., 5] - s1 * signals[..., 6]), -1)
+                            s2 * signals[..., 5] - s1 * signals[..., 6], sto, stab), -1)
 
     def sto_sign(self, signals: torch.Tensor) -> torch.Tensor:
         r"""$\sigma = \mathrm{sign}(S_{np_1})$: STO is $\Lambda = \Lambda_\max\sigma$,
