@@ -28,6 +28,7 @@ from pathlib import Path
 from omegaconf import DictConfig, OmegaConf
 
 from swimrl.actuation import ActuationSpec
+from swimrl.analysis.distill import DistillSettings
 from swimrl.analysis.fit_minimal import FitConfig, read_coefficients
 from swimrl.analysis.gain_scan import GainScanConfig
 from swimrl.env import EnvParams
@@ -273,6 +274,25 @@ def gain_scan_config(cfg: DictConfig) -> GainScanConfig:
     ev = eval_config(cfg)
     return from_node(GainScanConfig, {"": cfg}, setup=ev.setup, policy=ev.policy,
                      overwrite=ev.overwrite)
+
+
+@dataclasses.dataclass(frozen=True)
+class DistillConfig:
+    """``swimrl-distill`` (``conf/distill.yaml``): the teacher and the episodes it swims
+    (``eval``), the student's network (``model``) and the fit (``settings``)."""
+
+    eval: EvalConfig
+    model: ModelSpec
+    settings: DistillSettings
+
+
+def distill_config(cfg: DictConfig) -> DistillConfig:
+    """``swimrl-distill``: a baseline teacher (not ``strategy=policy``) and ``distill.*``."""
+    ev = eval_config(cfg)
+    require(ev.strategy.name != "policy", "strategy", ev.strategy.name,
+            "a baseline (a rule to distil), not policy")
+    return DistillConfig(ev, model_spec(cfg.model),
+                         from_node(DistillSettings, {"distill.": cfg.distill}))
 
 
 def model_spec(node: DictConfig) -> ModelSpec:

@@ -104,6 +104,11 @@ CASES = [
     (EVAL, ["flow=taylor_green", "actuation=shape_steer", "actuation.directions=discrete",
             "swimmer.psi=1"], "actuation.directions='discrete'"),
     (EVAL, ["flow=taylor_green", "task=vertical", "task.burn_in=500"], "task.burn_in=500"),
+    # swimrl-distill: a baseline teacher, the fit's keys
+    ("swimrl.cli.distill", ["strategy=policy", "policy=pretrained/ku10"], "strategy"),
+    ("swimrl.cli.distill", ["distill.holdout=1"], "distill.holdout=1"),
+    ("swimrl.cli.distill", ["distill.stride=0"], "distill.stride=0"),
+    ("swimrl.cli.distill", ["distill.lr=-1"], "distill.lr=-1"),
     # argparse commands (item 7)
     (TABLE, ["{tmp}/sweep", "--average", "sead"], "--average sead"),
     (TABLE, ["{tmp}/sweep", "--bogus"], "--bogus"),

@@ -100,3 +100,16 @@ def test_three_d_tables_are_what_the_records_give():
     assert len(runs) == len(list((folder / "runs").iterdir())) >= 6
     page = set((folder / "README.md").read_text().splitlines())
     assert [r for r in rows if r not in page] == []
+
+
+def test_noisy_rule_script_runs_at_a_tiny_size(tmp_path):
+    """learner_ablation/noisy_rule.py at a tiny size: one row per sigma, finite R_hat, and
+    sigma = 0 is the plain rule (equal for two seeds of the noise)."""
+    script = ROOT / "docs" / "results" / "learner_ablation" / "noisy_rule.py"
+    out = tmp_path / "noisy.json"
+    subprocess.run([sys.executable, str(script), str(out), "--sigmas", "0,0,0.5", "--flows",
+                    "1", "--swimmers", "4", "--duration", "1"], check=True, cwd=tmp_path)
+    rows = json.loads(out.read_text())["rows"]
+    assert [r["sigma"] for r in rows] == [0, 0, 0.5]
+    assert rows[0]["R_hat_mean"] == rows[1]["R_hat_mean"] > 0
+    assert rows[2]["R_hat_mean"] != rows[0]["R_hat_mean"]
