@@ -390,3 +390,32 @@ def test_gyrotaxis_stochastic_rows_are_the_records():
         cells = (f"| {name} | {r['R_hat_mean']:.3f} ± {r['R_hat_sem']:.3f} | "
                  f"{r['trapped_mean']:.2f} |")
         assert cells in text, cells
+
+
+def test_learner_ablation_comparison_rows_are_the_record():
+    """docs/results/learner_ablation/README.md's held-out table: R̂ ± SEM and the paired ratio
+    to STO of each row, from compare_seed1000000/comparison.json."""
+    text = page("docs/results/learner_ablation/README.md")
+    got = rows("learner_ablation/compare_seed1000000/comparison.json")
+    base = "policy(docs/results/learner_ablation/"
+    names = {"optimised(ku10_3d)": "optimised rule (`ku10_3d`)",
+             f"{base}distilled_ku10_3d)": "the rule distilled (`swimrl-distill`)",
+             f"{base}warm_terms_std02_ku10_seed0)": "PPO from the distilled rule, 3e7",
+             f"{base}terms_std02_const_ku10_seed0)": "`terms_std02_const`, 3e7",
+             f"{base}terms_std02_ku10_seed0)": "`terms_std02`, 3e7"}
+    sto = got["sto"]
+    assert f"| STO | {sto['R_hat_mean']:.3f} ± {sto['R_hat_sem']:.3f} | 1 |" in text
+    for label, name in names.items():
+        r = got[label]
+        cells = (f"| {name} | {r['R_hat_mean']:.3f} ± {r['R_hat_sem']:.3f} | "
+                 f"{r['ratio_to_first']:.3f} ± {r['ratio_sem']:.3f} |")
+        assert cells in text, cells
+
+
+def test_learner_ablation_noisy_rule_numbers_are_the_record():
+    """The noisy rule's R̂ per sigma quoted in the ablation README, from noisy_rule.json."""
+    text = page("docs/results/learner_ablation/README.md")
+    r = {row["sigma"]: row for row in record("learner_ablation/noisy_rule.json")["rows"]}
+    assert f"R̂ {r[0.0]['R_hat_mean']:.3f} ± {r[0.0]['R_hat_sem']:.3f} at σ = 0" in text
+    mid = ", ".join(f"{r[s]['R_hat_mean']:.3f}" for s in (0.2, 0.35, 0.5))
+    assert f"{mid} and {r[1.0]['R_hat_mean']:.3f} ± {r[1.0]['R_hat_sem']:.3f} at σ = 0.2" in text
