@@ -291,6 +291,9 @@ def distill_config(cfg: DictConfig) -> DistillConfig:
     ev = eval_config(cfg)
     require(ev.strategy.name != "policy", "strategy", ev.strategy.name,
             "a baseline (a rule to distil), not policy")
+    act = ev.setup.params.actuation
+    require(not (act.steers and act.directions == "discrete"), "actuation.directions",
+            act.directions, "continuous (the student is a TanhNormal actor)")
     return DistillConfig(ev, model_spec(cfg.model),
                          from_node(DistillSettings, {"distill.": cfg.distill}))
 

@@ -109,6 +109,9 @@ CASES = [
     ("swimrl.cli.distill", ["distill.holdout=1"], "distill.holdout=1"),
     ("swimrl.cli.distill", ["distill.stride=0"], "distill.stride=0"),
     ("swimrl.cli.distill", ["distill.lr=-1"], "distill.lr=-1"),
+    ("swimrl.cli.distill", ["flow=taylor_green", "actuation=steer",
+                            "actuation.directions=discrete", "swimmer.psi=1",
+                            "strategy=hand_rule"], "actuation.directions"),
     # argparse commands (item 7)
     (TABLE, ["{tmp}/sweep", "--average", "sead"], "--average sead"),
     (TABLE, ["{tmp}/sweep", "--bogus"], "--bogus"),

@@ -86,7 +86,8 @@ def teacher_samples(setup: RunSpec, teacher: StrategySpec, n_flows: int, n_swimm
 def fit_actor(model: ModelSpec, obs: torch.Tensor, act: torch.Tensor, action_spec,
               settings: DistillSettings, log: Callable[[str], None] | None = None):
     r"""The actor of ``model`` fitted to ``act`` from ``obs`` (loss of the module docstring)
-    on all but the last ``holdout`` of the samples (shuffled by ``fit_seed``); returns the
+    on all but a held-back fraction ``holdout`` of the samples (shuffled by ``fit_seed``; the
+    held-back states come from the same episodes); returns the
     actor and ``{"train_mse", "holdout_mse", "holdout_corr"}``."""
     gen = torch.Generator().manual_seed(settings.fit_seed)
     perm = torch.randperm(len(obs), generator=gen)
