@@ -23,10 +23,11 @@ from omegaconf import OmegaConf
 
 import swimrl.config
 from swimrl.actuation import ActuationSpec
+from swimrl.analysis.distill import DistillSettings
 from swimrl.analysis.fit_minimal import FitConfig
 from swimrl.analysis.gain_scan import GainScanConfig
 from swimrl.conf_values import yaml_value
-from swimrl.config import eval_config, strategy_spec
+from swimrl.config import DistillConfig, eval_config, strategy_spec
 from swimrl.env import EnvParams, SwimmerEnv
 from swimrl.errors import ConfigError
 from swimrl.evaluation.compare import CompareConfig, strategy_variants
@@ -51,7 +52,8 @@ EVALUATING = ("evaluate", "train", "compare", "naive_scan", "fit_minimal", "gain
 WITH_FLOW = (*EVALUATING, "figures")
 #: The typed configs without a default: the yaml holds every value.
 NO_DEFAULTS = (RunSpec, EvalConfig, TrainSettings, LossSettings, OptimSettings, ModelSpec,
-               TrainConfig, FitConfig, GainScanConfig, FiguresConfig, DNSFiguresConfig)
+               TrainConfig, FitConfig, GainScanConfig, FiguresConfig, DNSFiguresConfig,
+               DistillSettings, DistillConfig)
 _ABSENT = object()
 
 
