@@ -66,6 +66,23 @@ DERIVED_NAMES: tuple[str, ...] = ("lever", "torque")
 RULE_TERM_NAMES: tuple[str, ...] = ("sto_term", "stab_term")
 
 
+def _lever_and_torque(signals: torch.Tensor) -> tuple[torch.Tensor, torch.Tensor]:
+    r"""$(S_{np_1}^2 + S_{np_2}^2)^{1/2}$ and $S_{np_2}\omega_{p_1} - S_{np_1}\omega_{p_2}$
+    (the lever and $\boldsymbol n\cdot(\boldsymbol\omega\times\mathbb S\boldsymbol n)$) from
+    the seven signals, each ``(...)``."""
+    s1, s2 = signals[..., 2], signals[..., 3]
+    return torch.sqrt(s1 * s1 + s2 * s2), s2 * signals[..., 5] - s1 * signals[..., 6]
+
+
+def _rule_terms(signals: torch.Tensor, lever: torch.Tensor, torque: torch.Tensor
+                ) -> tuple[torch.Tensor, torch.Tensor]:
+    r"""The rule's STO term $\sqrt{1 - n_r^2}\,\mathrm{sign}\,S_{np_1}$ and stabilising term
+    torque/lever (0 where the lever vanishes), each ``(...)``."""
+    n_r = signals[..., 0]
+    stab = torch.where(lever > 0, torque / torch.where(lever > 0, lever, 1.0), 0.0)
+    return torch.sqrt(torch.clamp(1 - n_r * n_r, min=0.0)) * torch.sign(signals[..., 2]), stab
+
+
 def radial_direction(n: torch.Tensor, displacement: torch.Tensor) -> torch.Tensor:
     r"""$\boldsymbol e_r = \boldsymbol d/|\boldsymbol d|$, and $\boldsymbol n$ where
     $|\boldsymbol d| < 10^{-12}$ (the start point), ``(..., 3)``."""
@@ -185,10 +202,8 @@ class Body3D:
         = S_{np_2}\omega_{p_1} - S_{np_1}\omega_{p_2}$, then the rule's STO and stabilising
         terms (:meth:`invariant_terms`), ``(..., 4)``: all independent of the frame's rotation
         about $\boldsymbol n$."""
-        s1, s2 = signals[..., 2], signals[..., 3]
-        _, sto, stab, _ = self.invariant_terms(signals)
-        return torch.stack((torch.sqrt(s1 * s1 + s2 * s2),
-                            s2 * signals[..., 5] - s1 * signals[..., 6], sto, stab), -1)
+        lever, torque = _lever_and_torque(signals)
+        return torch.stack((lever, torque, *_rule_terms(signals, lever, torque)), -1)
 
     def sto_sign(self, signals: torch.Tensor) -> torch.Tensor:
         r"""$\sigma = \mathrm{sign}(S_{np_1})$: STO is $\Lambda = \Lambda_\max\sigma$,
@@ -202,12 +217,8 @@ class Body3D:
         |(\mathbb I - \boldsymbol n\boldsymbol n)\mathbb S\boldsymbol n|,\ S_{nn}\tau_K)$
         (0 for the third where the lever vanishes); in the plane they are
         :meth:`Body2D.invariant_terms <swimrl.physics.body2d.Body2D.invariant_terms>`."""
-        n_r, s_nn, s1, s2 = signals[..., 0], signals[..., 1], signals[..., 2], signals[..., 3]
-        lever = torch.sqrt(s1 * s1 + s2 * s2)
-        torque = s2 * signals[..., 5] - s1 * signals[..., 6]  # n.(omega x S n)
-        stab = torch.where(lever > 0, torque / torch.where(lever > 0, lever, 1.0), 0.0)
-        sto = torch.sqrt(torch.clamp(1 - n_r * n_r, min=0.0)) * torch.sign(s1)
-        return n_r, sto, stab, s_nn
+        sto, stab = _rule_terms(signals, *_lever_and_torque(signals))
+        return signals[..., 0], sto, stab, signals[..., 1]
 
     def draw_orientations(self, n: int, generator: torch.Generator, device, dtype
                           ) -> torch.Tensor:
