@@ -49,6 +49,8 @@ from swimrl.errors import as_float, keep_number_types, one_of
 
 #: The tasks (``task=NAME``); the first is the default.
 TASKS = ("displacement", "target", "vertical")
+#: What the reward counts (``reward.progress``); the first is the default (the task's reward).
+PROGRESS = ("distance", "swimming")
 
 
 @dataclass(frozen=True)
@@ -109,12 +111,23 @@ class RewardSpec:
         (:func:`~swimrl.physics.energy.drag_factor`).
     shape_change_weight
         $w_c \ge 0$: the cost of changing the shape between decisions.
+    progress
+        What the reward counts, one of :data:`PROGRESS`: ``distance`` (the task's reward,
+        e.g. the paper's $r_i = |\boldsymbol x(t_i) - \boldsymbol x_0| - |\boldsymbol x(t_{i-1})
+        - \boldsymbol x_0|$) or ``swimming``, the swimmer's own part of it,
+        $r_i = \tfrac12 v_s T_u\,[n_r(t_{i-1}) + n_r(t_i)]$ (the trapezoid rule for
+        $\int v_s\,\boldsymbol n\cdot\boldsymbol e_r\,\mathrm dt$ over the decision): the
+        flow's advection $\boldsymbol u\cdot\boldsymbol e_r$, which no signal predicts, is left
+        out of the learning signal. A training device only: $\hat R$ and every evaluation
+        still measure the distance. Not with ``task=target``.
     """
 
     energy_weight: float = yaml_value("evaluate", "reward.energy_weight")
     shape_change_weight: float = yaml_value("evaluate", "reward.shape_change_weight")
+    progress: str = yaml_value("evaluate", "reward.progress")
 
     def __post_init__(self) -> None:
+        one_of("reward.progress", self.progress, PROGRESS)
         as_float("reward.energy_weight", self.energy_weight, lambda v: v >= 0, ">= 0")
         as_float("reward.shape_change_weight", self.shape_change_weight, lambda v: v >= 0,
                  ">= 0")

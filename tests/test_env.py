@@ -8,8 +8,10 @@ from torchrl.envs.utils import check_env_specs
 
 from swimrl.config import eval_setup
 from swimrl.env import EnvParams, SwimmerEnv, build_env
+from swimrl.errors import ConfigError
 from swimrl.flows.stochastic import StochasticFlow
 from swimrl.policies.baselines import ShortTimeOptimal, as_actor
+from swimrl.task import RewardSpec, TaskSpec
 
 from .conftest import SMALL
 
@@ -160,3 +162,44 @@ def test_staggered_episodes_end_and_redraw_one_group_at_a_time():
     assert ended == [(4, [1, 3]), (8, [0, 2]), (12, [1, 3]), (16, [0, 2])]
     with pytest.raises(ValueError, match="groups=5"):
         env.stagger(5)
+
+
+def test_swimming_reward_is_the_distance_reward_less_the_advection():
+    """reward.progress=swimming: r_i = v_s T_u (n_r(t_{i-1}) + n_r(t_i)) / 2, on the same
+    trajectory as the distance reward; the difference of the two is the advection
+    u . e_r integrated over the decision (trapezoid, from the flow's velocity at the swimmers,
+    an independent computation; short decisions, swimmers away from their start, the median
+    over swimmers: a swimmer back near its start turns e_r within a decision)."""
+    envs = [small_env(n_swimmers=16, seed=5, duration=4.0, update_interval=0.02,
+                      reward=RewardSpec(progress=p))
+            for p in ("distance", "swimming")]
+    tds = [env.reset() for env in envs]
+    sto = as_actor(ShortTimeOptimal(0.98))
+    ref = envs[0]
+    t_u = ref.params.update_interval * ref.tau_k
+    v_t = ref.decision_length
+
+    def advection() -> torch.Tensor:  # u . e_r at the swimmers, (F, S)
+        q = ref.flow.sample(ref._flow_index, ref.pos.view(-1, 2)).view(*ref.batch_size, -1)
+        d = ref.displacement()
+        return (q[..., :2] * d).sum(-1) / d.norm(dim=-1)
+
+    worst = 0.0
+    for i in range(200):
+        n_r = tds[1]["signals"][..., 0]
+        u_r = advection() if i >= 100 else None  # far from the start: |x - x_0| >> v T_u
+        tds = [env.step(sto(td))["next"] for env, td in zip(envs, tds, strict=True)]
+        assert torch.equal(envs[0].pos, envs[1].pos)  # the reward does not change the motion
+        swim = tds[1]["reward"][..., 0]
+        torch.testing.assert_close(swim, 0.5 * v_t * (n_r + tds[1]["signals"][..., 0]))
+        if u_r is not None:
+            rest = tds[0]["reward"][..., 0] - swim - 0.5 * t_u * (u_r + advection())
+            worst = max(worst, float(rest.abs().median()))  # the trapezoid's error aside
+    assert worst < 0.05 * v_t, worst
+
+
+def test_swimming_reward_is_refused_for_a_target():
+    with pytest.raises(ConfigError, match="reward.progress"):
+        EnvParams(task=TaskSpec("target", 3.0, 0.5), reward=RewardSpec(progress="swimming"))
+    with pytest.raises(ConfigError, match="reward.progress"):
+        RewardSpec(progress="speed")

@@ -400,7 +400,9 @@ class SwimmerEnv(EnvBase):
             self.body.steer(direction)
         if self.task.target:
             return self._step_target(action)
-        before = self._progress(self.displacement())
+        swimming = self.params.reward.progress == "swimming"
+        disp = self.displacement()
+        before = self._swim_alignment(disp) if swimming else self._progress(disp)
         self.integrate(action)
         self.step_count += 1
         self.flow_step += 1
@@ -411,9 +413,23 @@ class SwimmerEnv(EnvBase):
         if self.task.vertical:
             self.window.update(after, self.step_count)
         out = self._observe(disp)
-        reward = after - before
+        if swimming:  # reward.progress=swimming: v_s T_u (n_r(t_{i-1}) + n_r(t_i)) / 2
+            reward = 0.5 * self.decision_length * (before + self._swim_alignment(disp))
+        else:
+            reward = after - before
         out.set("reward", (reward if cost is None else reward - cost).unsqueeze(-1))
         return out
+
+    def _swim_alignment(self, displacement: torch.Tensor) -> torch.Tensor:
+        r"""$n_r = \boldsymbol n\cdot\boldsymbol e_r$, ``(F, S)``, $\boldsymbol e_r$ along the
+        task's :meth:`frame`; 1 where the frame vector vanishes (a swimmer at its start, where
+        the signals take $\boldsymbol e_r = \boldsymbol n$)."""
+        f = self.frame(displacement)
+        r = f.norm(dim=-1)
+        at_start = r < 1e-12
+        n_f = (self.body.heading(self.orientation) * f).sum(-1)
+        return torch.where(at_start, torch.ones_like(r),
+                           n_f / torch.where(at_start, torch.ones_like(r), r))
 
     def _step_target(self, action: torch.Tensor) -> TensorDictBase:
         """One decision of ``task=target``: arrived swimmers stay where they are (no motion,

@@ -110,6 +110,9 @@ class EnvParams:
                 "actuation.name", self.actuation.name,
                 "'shape' without swimmer.bottom_heaviness (a preferred direction steers through "
                 "the gyrotactic torque: set swimmer.bottom_heaviness > 0)")
+        require(not (self.task.target and self.reward.progress != "distance"),
+                "reward.progress", self.reward.progress,
+                "'distance' with task=target (its reward and arrival count the distance)")
         if self.task.vertical:
             as_float("task.burn_in", self.task.burn_in, lambda v: v < self.duration,
                      f"in [0, episode.duration={self.duration}) (units tau_K)")

@@ -57,6 +57,7 @@ ADDED_KEYS = {
           "optim.lr_reference_minibatch": 2560,
           "task": {"name": "displacement", "distance": 20.0, "arrival_radius": 1.0},
           "reward": {"energy_weight": 0.0, "shape_change_weight": 0.0},
+          "reward.progress": "distance",
           "task.burn_in": 100.0,  # task=vertical's (not read by the others)
           "swimmer.bottom_heaviness": None,  # no gyrotaxis
           "swimmer.phi": None,
