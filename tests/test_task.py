@@ -162,6 +162,8 @@ def test_shape_change_cost():
     (["task.name=ring"], "task.name"),
     (["reward.energy_weight=-0.1"], "reward.energy_weight"),
     (["reward.shape_change_weight=-1"], "reward.shape_change_weight"),
+    (["reward.progress=speed"], "reward.progress"),
+    (["task=target", "reward.progress=swimming"], "reward.progress"),
 ])
 def test_bad_task_values_are_one_line(compose_cfg, over, key):
     with pytest.raises(ConfigError) as err:
