@@ -419,3 +419,16 @@ def test_learner_ablation_noisy_rule_numbers_are_the_record():
     assert f"R̂ {r[0.0]['R_hat_mean']:.3f} ± {r[0.0]['R_hat_sem']:.3f} at σ = 0" in text
     mid = ", ".join(f"{r[s]['R_hat_mean']:.3f}" for s in (0.2, 0.35, 0.5))
     assert f"{mid} and {r[1.0]['R_hat_mean']:.3f} ± {r[1.0]['R_hat_sem']:.3f} at σ = 0.2" in text
+
+
+def test_learner_ablation_arm_rows_are_their_metrics():
+    """Every arm of the learner ablation's first table: its final held-out R̂ ± SEM and its
+    training wall time, from the arm's metrics.json."""
+    text = page("docs/results/learner_ablation/README.md")
+    arms = re.findall(r"\| \[(\w+)\]\((\w+)/\) \| [^|]+ \| [^|]+ \| (\d+) s \| "
+                      r"([0-9.]+ ± [0-9.]+) \|", text)
+    assert len(arms) >= 10
+    for _, run, wall, cell in arms:
+        m = json.loads((RESULTS / "learner_ablation" / run / "metrics.json").read_text())
+        assert cell == f"{m['R_hat_mean']:.3f} ± {m['R_hat_sem']:.3f}", run
+        assert int(wall) == round(m["training"]["wall_s"]), run
