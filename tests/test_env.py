@@ -203,3 +203,18 @@ def test_swimming_reward_is_refused_for_a_target():
         EnvParams(task=TaskSpec("target", 3.0, 0.5), reward=RewardSpec(progress="swimming"))
     with pytest.raises(ConfigError, match="reward.progress"):
         RewardSpec(progress="speed")
+
+
+def test_swimming_share_is_the_sum_of_the_swimming_reward():
+    """outcomes()["swimming"], S_hat = (1/T) int n . e_r dt, is the episode's sum of the
+    swimming reward over v_s T (the same trapezoids), lies in [-1, 1], and leaves the
+    advection's share R_hat - S_hat; a reset clears it."""
+    env = small_env(n_swimmers=16, seed=2, duration=3.0, reward=RewardSpec(progress="swimming"))
+    td = env.rollout(env.params.n_decisions, as_actor(ShortTimeOptimal(0.98)))
+    total = td["next", "reward"].sum(dim=-2)[..., 0]
+    total = total / (env.decision_length * env.params.n_decisions)
+    share = env.outcomes()["swimming"]
+    torch.testing.assert_close(share, total, rtol=1e-4, atol=1e-5)
+    assert share.abs().max() <= 1 and share.mean() > 0.3  # STO turns swimmers outward
+    env.reset()
+    assert not env.outcomes()["swimming"].any()

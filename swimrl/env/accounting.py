@@ -40,6 +40,8 @@ def outcomes(env) -> dict[str, torch.Tensor]:
         ``(F, S)`` each: ``energy`` (``E_hat``, :mod:`swimrl.physics.energy`),
         ``shape_change`` (``C_hat = (1/T) sum_i |Lambda_i - Lambda_{i-1}| T_u``, the
         quantity ``reward.shape_change_weight`` prices) and, for
+        ``task=displacement``, ``swimming`` (``S_hat = (1/T) int n . e_r dt``, the swimmer's
+        own share of ``R_hat = S_hat + (1/(v_s T)) int u . e_r dt``), for
         ``task=target``, ``arrived`` (0/1), ``arrival_time`` (units ``tau_K``; NaN where
         not arrived) and ``final_distance`` (``|X - x|``, units ``ell_f``); for
         ``task=vertical``, ``vertical_velocity`` (``<v_z>/v_s`` over the window, as the score)
@@ -47,6 +49,8 @@ def outcomes(env) -> dict[str, torch.Tensor]:
         cell, :meth:`~swimrl.env.core.SwimmerEnv.cell_size`).
     """
     out = {"energy": env.energy.clone(), "shape_change": env.shape_change.clone()}
+    if not env.task.target and not env.task.vertical:
+        out["swimming"] = env.alignment.clone()
     if env.task.vertical:
         z = vertical.rise(env.displacement(), env.body.vertical_axis)
         out.update(vertical_velocity=env.window.vertical_velocity(

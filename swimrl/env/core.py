@@ -136,6 +136,9 @@ class SwimmerEnv(EnvBase):
         self.energy = torch.zeros(batch, device=dev, dtype=dtype)
         #: ``C_hat`` so far: ``(1/T) sum_i |Lambda_i - Lambda_{i-1}| T_u`` (the shape change).
         self.shape_change = torch.zeros(batch, device=dev, dtype=dtype)
+        #: ``S_hat`` so far: ``(1/T) int n . e_r dt`` (trapezoid per decision), the swimmer's
+        #: own share of ``R_hat`` (``task=displacement``; :func:`~swimrl.env.accounting.outcomes`).
+        self.alignment = torch.zeros(batch, device=dev, dtype=dtype)
         #: The previous decision's ``Lambda`` (NaN before the first; the shape-change cost).
         self.last_action = torch.full(batch, math.nan, device=dev, dtype=dtype)
         #: ``task=vertical``'s measuring window (:class:`~swimrl.env.vertical.Window`).
@@ -362,6 +365,7 @@ class SwimmerEnv(EnvBase):
             self.arrived[mask] = False
             self.arrival_step[mask] = -1
             self.energy[mask] = 0
+            self.alignment[mask] = 0
             self.shape_change[mask] = 0
             self.window.reset(mask)
             self.last_action[mask] = math.nan
@@ -400,9 +404,9 @@ class SwimmerEnv(EnvBase):
             self.body.steer(direction)
         if self.task.target:
             return self._step_target(action)
-        swimming = self.params.reward.progress == "swimming"
         disp = self.displacement()
-        before = self._swim_alignment(disp) if swimming else self._progress(disp)
+        aligned = self._swim_alignment(disp)
+        before = self._progress(disp)
         self.integrate(action)
         self.step_count += 1
         self.flow_step += 1
@@ -413,8 +417,10 @@ class SwimmerEnv(EnvBase):
         if self.task.vertical:
             self.window.update(after, self.step_count)
         out = self._observe(disp)
-        if swimming:  # reward.progress=swimming: v_s T_u (n_r(t_{i-1}) + n_r(t_i)) / 2
-            reward = 0.5 * self.decision_length * (before + self._swim_alignment(disp))
+        aligned = 0.5 * (aligned + self._swim_alignment(disp))  # n_r over the decision
+        self.alignment += aligned / self.params.n_decisions
+        if self.params.reward.progress == "swimming":  # v_s T_u (n_r(t_{i-1}) + n_r(t_i)) / 2
+            reward = self.decision_length * aligned
         else:
             reward = after - before
         out.set("reward", (reward if cost is None else reward - cost).unsqueeze(-1))

@@ -43,7 +43,8 @@ from .statistics import paired_difference, paired_ratio
 #: Outcome keys a comparison row carries over from its strategy's metrics (where present).
 ROW_OUTCOMES = ("energy_mean", "energy_sem", "energy_std", "energy_per_flow",
                 "shape_change_mean", "shape_change_sem", "shape_change_std",
-                "shape_change_per_flow", "arrival_mean",
+                "shape_change_per_flow", "swimming_mean", "swimming_sem", "swimming_std",
+                "swimming_per_flow", "arrival_mean",
                 "arrival_sem", "arrival_std", "arrival_per_flow", "final_distance_mean",
                 "final_distance_sem", "final_distance_std", "final_distance_per_flow",
                 "arrival_time_mean", "arrival_time_median", "n_arrived", "arrival_cdf_t",

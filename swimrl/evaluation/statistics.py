@@ -61,14 +61,14 @@ def mean_flow_stats(stats: list[dict], how: str) -> dict:
 def chunk_outcomes(outcomes: dict, block: slice, update_interval: float) -> dict:
     """One flow chunk's per-flow outcomes of the swimmers ``block`` (a strategy's block of
     the environment) from :meth:`~swimrl.env.SwimmerEnv.outcomes`: the per-flow means of
-    ``energy``, ``shape_change``, for ``task=target`` of ``arrived`` and
-    ``final_distance``, for ``task=vertical`` of ``trapped``; every arrived swimmer's arrival
-    decision (``arrival_steps``, one list per flow: the pooled median is exact) and the
-    swimmers per flow of the block (``swimmers_per_flow``, the denominator of the arrival-time
-    distribution,
+    ``energy``, ``shape_change``, ``swimming`` (``task=displacement``), for ``task=target`` of
+    ``arrived`` and ``final_distance``, for ``task=vertical`` of ``trapped``; every arrived
+    swimmer's arrival decision (``arrival_steps``, one list per flow: the pooled median is
+    exact) and the swimmers per flow of the block (``swimmers_per_flow``, the denominator of
+    the arrival-time distribution,
     :func:`outcome_statistics`)."""
     out = {}
-    for key in ("energy", "shape_change", "arrived", "final_distance", "trapped"):
+    for key in ("energy", "shape_change", "swimming", "arrived", "final_distance", "trapped"):
         if key in outcomes:
             out[key] = outcomes[key][:, block].double().mean(dim=1).cpu().tolist()
     if "arrival_time" in outcomes:
@@ -88,7 +88,8 @@ def outcome_statistics(chunks: Sequence[dict], update_interval: float,
     r"""A strategy's outcomes over all flows from its :func:`chunk_outcomes` of every chunk.
 
     ``energy_mean/std/sem`` (``E_hat``), ``shape_change_mean/std/sem`` (``C_hat``, where the
-    chunks have it: records written before it do not), and for ``task=target``
+    chunks have it: records written before it do not), ``swimming_mean/std/sem`` (``S_hat``,
+    ``task=displacement``, likewise), and for ``task=target``
     ``arrival_mean/std/sem`` (the arrival probability within ``T``) and
     ``final_distance_mean/std/sem`` (units ``ell_f``), for ``task=vertical``
     ``trapped_mean/std/sem`` (the trapped fraction), each with its ``*_per_flow`` values
@@ -125,7 +126,7 @@ def outcome_statistics(chunks: Sequence[dict], update_interval: float,
         return {}
     out: dict = {}
     for key, name in (("energy", "energy"), ("shape_change", "shape_change"),
-                      ("arrived", "arrival"),
+                      ("swimming", "swimming"), ("arrived", "arrival"),
                       ("final_distance", "final_distance"), ("trapped", "trapped")):
         if key in chunks[0]:
             per_flow = [x for c in chunks for x in c[key]]
