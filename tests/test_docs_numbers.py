@@ -432,3 +432,32 @@ def test_learner_ablation_arm_rows_are_their_metrics():
         m = json.loads((RESULTS / "learner_ablation" / run / "metrics.json").read_text())
         assert cell == f"{m['R_hat_mean']:.3f} ± {m['R_hat_sem']:.3f}", run
         assert int(wall) == round(m["training"]["wall_s"]), run
+
+
+def test_learner_ablation_gain_split_is_the_record():
+    """The swimming/advection table of the ablation README: R̂, Ŝ, R̂ − Ŝ per strategy and the
+    paired differences to the rule, recomputed from gain_split_{3d,2d}/comparison.json."""
+    text = page("docs/results/learner_ablation/README.md")
+
+    def fmt(v: float, signed: bool = False) -> str:
+        return (f"{v:+.3f}" if signed else f"{v:.3f}").replace("-", "−")
+
+    def paired(a, b) -> str:
+        d = np.asarray(a) - np.asarray(b)
+        return f"{fmt(d.mean(), True)} ± {d.std(ddof=1) / np.sqrt(d.size):.3f}"
+
+    for dim, rule in (("3d", "optimised(ku10_3d)"), ("2d", "optimised(ku10_2d)")):
+        got = rows(f"learner_ablation/gain_split_{dim}/comparison.json")
+
+        def parts(r):
+            return (r["per_flow"], r["swimming_per_flow"],
+                    list(np.subtract(r["per_flow"], r["swimming_per_flow"])))
+
+        ref = parts(got[rule])
+        for label, r in got.items():
+            p = parts(r)
+            cells = (f"| {fmt(np.mean(p[0]))} | {fmt(np.mean(p[1]))} | "
+                     f"{fmt(np.mean(p[2]), True)} | ")
+            if label != rule:
+                cells += " | ".join(paired(a, b) for a, b in zip(ref, p, strict=True)) + " |"
+            assert cells in text, (label, cells)
