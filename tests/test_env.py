@@ -218,3 +218,51 @@ def test_swimming_share_is_the_sum_of_the_swimming_reward():
     assert share.abs().max() <= 1 and share.mean() > 0.3  # STO turns swimmers outward
     env.reset()
     assert not env.outcomes()["swimming"].any()
+
+
+def test_critic_observation_is_the_observation_and_the_flow_along_e_r():
+    """observe_flow_for_critic(): critic_observation = (observation, u_r / v_s, u_perp / v_s);
+    u_r v_s T_u is the advection the distance reward holds beyond the swimming reward (the
+    trapezoid check of the test above, here from the env's own features), and
+    u_r^2 + u_perp^2 = |u|^2 with u sampled from the flow."""
+    env = small_env(n_swimmers=16, seed=5, duration=4.0, update_interval=0.02)
+    env.observe_flow_for_critic()
+    check_env_specs(env)
+    td = env.reset()
+    sto = as_actor(ShortTimeOptimal(0.98))
+    t_u = env.params.update_interval * env.tau_k
+    gaps = []
+    for i in range(150):
+        dist, align = env.displacement().norm(dim=-1), env._swim_alignment(env.displacement())
+        u_r = td["critic_observation"][..., -2] * env.swim_speed
+        td = env.step(sto(td))["next"]
+        obs = td["critic_observation"]
+        assert torch.equal(obs[..., :-2], td["observation"])
+        q = env.flow.sample(env._flow_index, env.pos.view(-1, 2)).view(*env.batch_size, -1)
+        speed2 = (obs[..., -2:] ** 2).sum(-1) * env.swim_speed**2
+        torch.testing.assert_close(speed2, (q[..., :2] ** 2).sum(-1), rtol=1e-4, atol=1e-6)
+        if i >= 100:
+            swim = 0.5 * env.decision_length * (align + env._swim_alignment(env.displacement()))
+            adv = 0.5 * t_u * (u_r + obs[..., -2] * env.swim_speed)
+            gaps.append(float((env.displacement().norm(dim=-1) - dist - swim - adv)
+                              .abs().median()))
+    assert max(gaps) < 0.05 * env.decision_length, max(gaps)
+
+
+def test_critic_observation_in_a_point_flow():
+    """The same features in the 3D point env: |u| from the flow's own sample."""
+    from swimrl.env.point import PointSwimmerEnv
+    from swimrl.flows.stochastic3d import StochasticFlow3D
+    from swimrl.physics.body3d import SIGNAL_NAMES_3D
+
+    gen = torch.Generator().manual_seed(3)
+    flow = StochasticFlow3D(2, 10.0, generator=gen)
+    env = PointSwimmerEnv(flow, 4, EnvParams(signals=SIGNAL_NAMES_3D, duration=1.0),
+                          generator=gen, kernel="eager")
+    env.observe_flow_for_critic()
+    check_env_specs(env)
+    td = env.step(env.rand_action(env.reset()))["next"]
+    feats = td["critic_observation"][..., -2:] * env.swim_speed
+    u = flow.sample(env.pos)[0]
+    torch.testing.assert_close((feats**2).sum(-1), (u**2).sum(-1), rtol=1e-4, atol=1e-6)
+    assert (feats[..., 1] >= 0).all()

@@ -793,3 +793,21 @@ def test_rule_terms_signal_set_adds_the_rules_terms(compose_cfg, flow, first):
     from swimrl.physics.body import body, observable_names
     dim = 3 if "3d" in flow else 2
     assert set(names) <= set(observable_names(body(dim)))
+
+
+def test_asymmetric_critic_reads_the_flow_and_the_actor_does_not(train_cfg, tmp_path):
+    """``train.critic_flow=true``: the critic's input is the observation and (u_r, u_perp)/v_s
+    (two more), the actor's the observation alone; the run trains, resumes and writes a
+    policy file that evaluates like any other."""
+    cfg = train_cfg("train.critic_flow=true", "train.eval_every=0", "train.stop_after_updates=2")
+    assert train(cfg, tmp_path) is None
+    trainer = PPOTrainer(train_config(cfg), make_plan(train_config(cfg)), tmp_path / "other")
+    n_obs = trainer.env.observation_spec["observation"].shape[-1]
+    assert list(trainer.critic.in_keys) == ["critic_observation"]
+    assert trainer.critic.module[0].in_features == n_obs + 2
+    assert list(trainer.actor.in_keys) == ["observation"]
+    trainer.close()
+    metrics = train(train_cfg("train.critic_flow=true", "train.eval_every=0", "resume=true"),
+                    tmp_path)
+    assert metrics["training"]["updates"] == 4 and math.isfinite(metrics["R_hat_mean"])
+    assert load_file(tmp_path / "policy.pt")["actor"]

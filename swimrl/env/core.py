@@ -167,6 +167,8 @@ class SwimmerEnv(EnvBase):
             self.observation_spec["rise"] = Unbounded(shape=batch + (1,), device=dev,
                                                       dtype=dtype)
         self.reward_spec = Unbounded(shape=batch + (1,), device=dev, dtype=dtype)
+        #: Whether the observations carry ``critic_observation`` (:meth:`observe_flow_for_critic`).
+        self.critic_flow = False
         self.done_spec = Composite(
             done=Categorical(2, shape=batch + (1,), dtype=torch.bool, device=dev),
             terminated=Categorical(2, shape=batch + (1,), dtype=torch.bool, device=dev),
@@ -174,6 +176,41 @@ class SwimmerEnv(EnvBase):
             shape=batch,
             device=dev,
         )
+
+    def observe_flow_for_critic(self) -> None:
+        r"""Add ``critic_observation`` to every observation (``train.critic_flow``): the
+        policy's observation and two signals the policy does not see, the flow's velocity at
+        the swimmer along and across the task's direction, $u_r = \boldsymbol u\cdot
+        \boldsymbol e_r$ and $u_\perp = |\boldsymbol u - u_r\boldsymbol e_r|$, in units of
+        the swimming speed $v_s$ (:meth:`flow_features`). A critic that reads them predicts the
+        advection part of the return; the actor, and so the policy, is unchanged."""
+        self.critic_flow = True
+        batch, dev = self.batch_size, self.device
+        n_obs = self.observation_spec["observation"].shape[-1] + 2
+        spec = self.observation_spec.clone()
+        spec["critic_observation"] = Unbounded(shape=batch + (n_obs,), device=dev,
+                                               dtype=self.pos.dtype)
+        self.observation_spec = spec
+
+    def flow_velocity(self) -> torch.Tensor:
+        """The flow's velocity at the swimmers, ``(F, S, d)`` (the first ``d`` of the body's
+        channels)."""
+        q = self.flow.sample(self._flow_index, self.pos.view(-1, self.dim))
+        return q[:, : self.dim].reshape(*self.batch_size, self.dim)
+
+    def flow_features(self, displacement: torch.Tensor) -> torch.Tensor:
+        r"""$(u_r, u_\perp)/v_s$, ``(F, S, 2)``: the flow's velocity at the swimmers along
+        $\boldsymbol e_r$ (the direction of the task's :meth:`frame`; $\boldsymbol n$ at the
+        start point, as the signals) and the size of its remainder."""
+        u = self.flow_velocity()
+        f = self.frame(displacement)
+        r = f.norm(dim=-1, keepdim=True)
+        at_start = r < 1e-12
+        e_r = torch.where(at_start, self.body.heading(self.orientation),
+                          f / torch.where(at_start, torch.ones_like(r), r))
+        u_r = (u * e_r).sum(-1, keepdim=True)
+        u_perp = (u - u_r * e_r).norm(dim=-1, keepdim=True)
+        return torch.cat((u_r, u_perp), -1) / self.swim_speed
 
     def stagger(self, groups: int) -> None:
         """Offset the episodes of ``groups`` groups of flows (flow ``f`` in group ``f mod
@@ -282,6 +319,9 @@ class SwimmerEnv(EnvBase):
         }
         if self.task.vertical:
             out["rise"] = vertical.rise(disp, self.body.vertical_axis).unsqueeze(-1)
+        if self.critic_flow:
+            out["critic_observation"] = torch.cat(
+                (out["observation"], self.flow_features(disp)), -1)
         if self.task.target:
             arrived = self.arrived.unsqueeze(-1)
             out.update(target_distance=(self.target - disp).norm(dim=-1, keepdim=True),

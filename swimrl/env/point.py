@@ -98,6 +98,10 @@ class PointSwimmerEnv(SwimmerEnv):
         u, grad = self.flow.sample(pos)
         return self.body.channels(u, grad)
 
+    def flow_velocity(self) -> torch.Tensor:
+        """The flow's velocity at the swimmers, ``(F, S, d)``."""
+        return self.flow.sample(self.pos)[0]
+
     def signals(self, displacement: torch.Tensor | None = None) -> torch.Tensor:
         """All the body's signals (:attr:`signal_names`) in the task's frame."""
         return self.body.signals(self._channels(self.pos), self.orientation,

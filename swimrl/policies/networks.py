@@ -291,10 +291,12 @@ def value_critic(
     activation: str = yaml_value("train", "model.activation"),
     device=None,
     dtype=torch.float32,
+    *,
+    in_key: str,
 ) -> ValueOperator:
-    """``ValueOperator`` ``observation -> state_value``."""
+    """``ValueOperator`` ``in_key -> state_value`` (``n_obs`` inputs)."""
     return ValueOperator(
-        make_mlp(n_obs, 1, hidden, activation, 1.0, device, dtype), in_keys=["observation"]
+        make_mlp(n_obs, 1, hidden, activation, 1.0, device, dtype), in_keys=[in_key]
     )
 
 
@@ -370,10 +372,12 @@ def deterministic_actor(actor: ProbabilisticActor) -> TensorDictModule:
 
 
 def actor_critic(model: ModelSpec, n_obs: int, spec: Bounded | Categorical, device=None,
-                 dtype=torch.float32) -> tuple[ProbabilisticActor, ValueOperator]:
+                 dtype=torch.float32, critic_obs: tuple[str, int] | None = None
+                 ) -> tuple[ProbabilisticActor, ValueOperator]:
     """The actor (:func:`tanh_normal_actor` for a ``Bounded`` ``spec``,
     :func:`categorical_actor` for a ``Categorical`` one) and critic (:func:`value_critic`) of
-    one agent, shaped by ``model`` (``model.*``), on ``n_obs`` signals."""
+    one agent, shaped by ``model`` (``model.*``), on ``n_obs`` signals; the critic on
+    ``critic_obs = (key, width)`` where given (an asymmetric critic), else on the actor's."""
     shape = {"hidden": list(model.hidden), "activation": model.activation, "device": device,
              "dtype": dtype}
     if isinstance(_action(spec), Categorical):
@@ -381,5 +385,6 @@ def actor_critic(model: ModelSpec, n_obs: int, spec: Bounded | Categorical, devi
     else:
         actor = tanh_normal_actor(n_obs, spec, init_std=model.init_std, min_std=model.min_std,
                                   **shape)
-    critic = value_critic(n_obs, **shape)
+    key, width = critic_obs or ("observation", n_obs)
+    critic = value_critic(width, in_key=key, **shape)
     return actor, critic

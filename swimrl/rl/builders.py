@@ -55,9 +55,13 @@ def make_env(flow: FlowSpec, params: EnvParams, runtime: Runtime, train: TrainSe
     """Training env: ``train.n_flows x train.n_swimmers`` swimmers in ``flow``, seeded with
     ``seed`` (the training stream, :func:`~swimrl.rl.plan.training_seed`), episodes staggered
     in ``train.stagger`` groups (:meth:`~swimrl.env.SwimmerEnv.stagger`), with the reward
-    multiplied by ``train.reward_scale`` (None: :func:`auto_reward_scale` at ``loss.gamma``)."""
+    multiplied by ``train.reward_scale`` (None: :func:`auto_reward_scale` at ``loss.gamma``);
+    with ``train.critic_flow`` its observations carry ``critic_observation``
+    (:meth:`~swimrl.env.SwimmerEnv.observe_flow_for_critic`)."""
     base = build_env(flow, params, runtime, train.n_flows, train.n_swimmers, seed,
                      stagger=train.stagger)
+    if train.critic_flow:
+        base.observe_flow_for_critic()
     scale = train.reward_scale
     if scale is None:
         scale = auto_reward_scale(base, loss.gamma)
@@ -78,9 +82,14 @@ def make_actor_critic(model: ModelSpec, env: EnvBase, runtime: Runtime):
     """Actor and critic on the env's observation, the actor read from its action spec
     (``env.action_spec_unbatched``): a ``TanhNormal`` within the ``Bounded`` spec's
     ``low``/``high`` (the shape factor, a steering vector, or both), or a ``Categorical`` of a
-    discrete one (:func:`swimrl.policies.networks.actor_critic`)."""
-    return actor_critic(model, env.observation_spec["observation"].shape[-1],
-                        env.action_spec_unbatched, device=runtime.device, dtype=runtime.dtype)
+    discrete one (:func:`swimrl.policies.networks.actor_critic`); the critic on
+    ``critic_observation`` where the env has it (``train.critic_flow``)."""
+    spec = env.observation_spec
+    has = "critic_observation" in spec.keys()  # noqa: SIM118
+    critic_key = "critic_observation" if has else "observation"
+    return actor_critic(model, spec["observation"].shape[-1], env.action_spec_unbatched,
+                        device=runtime.device, dtype=runtime.dtype,
+                        critic_obs=(critic_key, spec[critic_key].shape[-1]))
 
 
 def make_collector(env: EnvBase, actor, train: TrainSettings, total_frames: int,

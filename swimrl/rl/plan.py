@@ -84,6 +84,8 @@ class TrainSettings:
     # warm start: the policy whose actor weights start the run (None: random initialisation)
     init_policy: str | None
     actor_frozen_updates: int  # the first updates step the critic only
+    # the critic also reads the flow's velocity at the swimmer (SwimmerEnv.observe_flow_for_critic)
+    critic_flow: bool
 
     @property
     def frames_per_batch(self) -> int:
@@ -130,6 +132,7 @@ class TrainSettings:
         if self.gae_chunk is not None:
             as_int(k("gae_chunk"), self.gae_chunk)
         as_bool(k("compare_baselines"), self.compare_baselines)
+        as_bool(k("critic_flow"), self.critic_flow)
         require(as_int(k("stagger"), self.stagger) <= n_flows, k("stagger"), self.stagger,
                 f"an integer in [1, train.n_flows={n_flows}]")
         if self.init_policy is not None:

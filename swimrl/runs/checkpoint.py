@@ -53,6 +53,7 @@ ADDED_KEYS = {
           "train.stagger": 1,
           "train.init_policy": None,  # random initialisation
           "train.actor_frozen_updates": 0,
+          "train.critic_flow": False,  # the critic on the policy's observation
           "optim.lr_scale": "none",  # the rates as given
           "optim.lr_reference_minibatch": 2560,
           "task": {"name": "displacement", "distance": 20.0, "arrival_radius": 1.0},
