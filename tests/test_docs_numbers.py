@@ -425,7 +425,7 @@ def test_learner_ablation_arm_rows_are_their_metrics():
     """Every arm of the learner ablation's first table: its final held-out R̂ ± SEM and its
     training wall time, from the arm's metrics.json."""
     text = page("docs/results/learner_ablation/README.md")
-    arms = re.findall(r"\| \[(\w+)\]\((\w+)/\) \| [^|]+ \| [^|]+ \| (\d+) s \| "
+    arms = re.findall(r"\| \[([^\]]+)\]\((\w+)/\) \| [^|]+ \| [^|]+ \| (\d+) s \| "
                       r"([0-9.]+ ± [0-9.]+) \|", text)
     assert len(arms) >= 10
     for _, run, wall, cell in arms:
