@@ -461,3 +461,24 @@ def test_learner_ablation_gain_split_is_the_record():
             if label != rule:
                 cells += " | ".join(paired(a, b) for a, b in zip(ref, p, strict=True)) + " |"
             assert cells in text, (label, cells)
+
+
+def test_learner_ablation_asymmetric_critic_is_the_record():
+    """The asymmetric-critic table: R̂ ± SEM, the ratio to STO and the paired differences to
+    the rule in R̂, Ŝ and R̂ − Ŝ, from the runs' metrics.json and gain_split_3d."""
+    text = page("docs/results/learner_ablation/README.md")
+    got = rows("learner_ablation/gain_split_3d/comparison.json")
+    rule, sto = got["optimised(ku10_3d)"], got["sto"]
+    ref = np.asarray(rule["per_flow"]), np.asarray(rule["swimming_per_flow"])
+
+    def paired(d) -> str:
+        return f"{d.mean():+.3f} ± {d.std(ddof=1) / np.sqrt(d.size):.3f}".replace("-", "−")
+
+    for seed in (0, 1):
+        m = record(f"learner_ablation/cflow_terms_std02_const_ku10_seed{seed}/metrics.json")
+        r, s = np.asarray(m["per_flow"]), np.asarray(m["swimming_per_flow"])
+        ratio = r.sum() / np.sum(sto["per_flow"])
+        cells = (f"| {seed} | {m['R_hat_mean']:.3f} ± {m['R_hat_sem']:.3f} | {ratio:.3f} | "
+                 f"{paired(ref[0] - r)} | {paired(ref[1] - s)} | "
+                 f"{paired((ref[0] - ref[1]) - (r - s))} |")
+        assert cells in text, cells
