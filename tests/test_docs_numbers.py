@@ -482,3 +482,15 @@ def test_learner_ablation_asymmetric_critic_is_the_record():
                  f"{paired(ref[0] - r)} | {paired(ref[1] - s)} | "
                  f"{paired((ref[0] - ref[1]) - (r - s))} |")
         assert cells in text, cells
+
+
+def test_learner_ablation_asymmetric_critic_probe_is_the_record():
+    """corr(Λ, Λ*) of the asymmetric critic's seeds in the arm table (real-flow states, then
+    isotropic ones: the row's last two cells), from probe_cflow/probe.json."""
+    lines = (RESULTS / "learner_ablation" / "README.md").read_text(encoding="utf-8").splitlines()
+    got = {(r["policy"].rstrip("/").rsplit("/", 1)[-1], r["states"]): r["corr_star"]
+           for r in record("learner_ablation/probe_cflow/probe.json")["rows"]}
+    for seed in (0, 1):
+        run = f"cflow_terms_std02_const_ku10_seed{seed}"
+        row = next(line for line in lines if f"]({run}/)" in line)
+        assert row.endswith(f"| {got[(run, 'flows')]:.2f} | {got[(run, 'gaussian')]:.2f} |"), row
