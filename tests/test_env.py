@@ -8,6 +8,7 @@ from torchrl.envs.utils import check_env_specs
 
 from swimrl.config import eval_setup
 from swimrl.env import EnvParams, SwimmerEnv, build_env
+from swimrl.env.features import observe_flow_for_critic
 from swimrl.errors import ConfigError
 from swimrl.flows.stochastic import StochasticFlow
 from swimrl.policies.baselines import ShortTimeOptimal, as_actor
@@ -221,19 +222,19 @@ def test_swimming_share_is_the_sum_of_the_swimming_reward():
 
 
 def test_critic_observation_is_the_observation_and_the_flow_along_e_r():
-    """observe_flow_for_critic(): critic_observation = (observation, u_r / v_s, u_perp / v_s);
+    """observe_flow_for_critic(env): critic_observation = (observation, u_r / v_s, u_perp / v_s);
     u_r v_s T_u is the advection the distance reward holds beyond the swimming reward (the
     trapezoid check of the test above, here from the env's own features), and
     u_r^2 + u_perp^2 = |u|^2 with u sampled from the flow."""
     env = small_env(n_swimmers=16, seed=5, duration=4.0, update_interval=0.02)
-    env.observe_flow_for_critic()
+    observe_flow_for_critic(env)
     check_env_specs(env)
     td = env.reset()
     sto = as_actor(ShortTimeOptimal(0.98))
     t_u = env.params.update_interval * env.tau_k
     gaps = []
     for i in range(150):
-        dist, align = env.displacement().norm(dim=-1), env._swim_alignment(env.displacement())
+        dist, align = env.displacement().norm(dim=-1), env.swim_alignment(env.displacement())
         u_r = td["critic_observation"][..., -2] * env.swim_speed
         td = env.step(sto(td))["next"]
         obs = td["critic_observation"]
@@ -242,7 +243,7 @@ def test_critic_observation_is_the_observation_and_the_flow_along_e_r():
         speed2 = (obs[..., -2:] ** 2).sum(-1) * env.swim_speed**2
         torch.testing.assert_close(speed2, (q[..., :2] ** 2).sum(-1), rtol=1e-4, atol=1e-6)
         if i >= 100:
-            swim = 0.5 * env.decision_length * (align + env._swim_alignment(env.displacement()))
+            swim = 0.5 * env.decision_length * (align + env.swim_alignment(env.displacement()))
             adv = 0.5 * t_u * (u_r + obs[..., -2] * env.swim_speed)
             gaps.append(float((env.displacement().norm(dim=-1) - dist - swim - adv)
                               .abs().median()))
@@ -259,7 +260,7 @@ def test_critic_observation_in_a_point_flow():
     flow = StochasticFlow3D(2, 10.0, generator=gen)
     env = PointSwimmerEnv(flow, 4, EnvParams(signals=SIGNAL_NAMES_3D, duration=1.0),
                           generator=gen, kernel="eager")
-    env.observe_flow_for_critic()
+    observe_flow_for_critic(env)
     check_env_specs(env)
     td = env.step(env.rand_action(env.reset()))["next"]
     feats = td["critic_observation"][..., -2:] * env.swim_speed

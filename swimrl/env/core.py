@@ -13,10 +13,11 @@ from torchrl.envs import EnvBase
 
 import swimrl.physics.body as bodies
 from swimrl.conf_values import yaml_value
-from swimrl.env import accounting, vertical
+from swimrl.env import accounting, features, vertical
 from swimrl.env.actuation import action_spec, controls
 from swimrl.env.integrity import check_displacement
 from swimrl.env.params import EnvParams, clock_offsets
+from swimrl.env.target import step_target
 from swimrl.errors import ConfigError
 from swimrl.flows.base import GriddedFlow
 from swimrl.physics.body import SHAPE_SIGNAL, Body, signal_indices
@@ -167,7 +168,8 @@ class SwimmerEnv(EnvBase):
             self.observation_spec["rise"] = Unbounded(shape=batch + (1,), device=dev,
                                                       dtype=dtype)
         self.reward_spec = Unbounded(shape=batch + (1,), device=dev, dtype=dtype)
-        #: Whether the observations carry ``critic_observation`` (:meth:`observe_flow_for_critic`).
+        #: Whether the observations carry ``critic_observation``
+        #: (:func:`~swimrl.env.features.observe_flow_for_critic`).
         self.critic_flow = False
         self.done_spec = Composite(
             done=Categorical(2, shape=batch + (1,), dtype=torch.bool, device=dev),
@@ -177,40 +179,10 @@ class SwimmerEnv(EnvBase):
             device=dev,
         )
 
-    def observe_flow_for_critic(self) -> None:
-        r"""Add ``critic_observation`` to every observation (``train.critic_flow``): the
-        policy's observation and two signals the policy does not see, the flow's velocity at
-        the swimmer along and across the task's direction, $u_r = \boldsymbol u\cdot
-        \boldsymbol e_r$ and $u_\perp = |\boldsymbol u - u_r\boldsymbol e_r|$, in units of
-        the swimming speed $v_s$ (:meth:`flow_features`). A critic that reads them predicts the
-        advection part of the return; the actor, and so the policy, is unchanged."""
-        self.critic_flow = True
-        batch, dev = self.batch_size, self.device
-        n_obs = self.observation_spec["observation"].shape[-1] + 2
-        spec = self.observation_spec.clone()
-        spec["critic_observation"] = Unbounded(shape=batch + (n_obs,), device=dev,
-                                               dtype=self.pos.dtype)
-        self.observation_spec = spec
-
     def flow_velocity(self) -> torch.Tensor:
-        """The flow's velocity at the swimmers, ``(F, S, d)`` (the first ``d`` of the body's
-        channels)."""
+        """The flow's velocity at the swimmers, ``(F, S, d)`` (the body's first channels)."""
         q = self.flow.sample(self._flow_index, self.pos.view(-1, self.dim))
         return q[:, : self.dim].reshape(*self.batch_size, self.dim)
-
-    def flow_features(self, displacement: torch.Tensor) -> torch.Tensor:
-        r"""$(u_r, u_\perp)/v_s$, ``(F, S, 2)``: the flow's velocity at the swimmers along
-        $\boldsymbol e_r$ (the direction of the task's :meth:`frame`; $\boldsymbol n$ at the
-        start point, as the signals) and the size of its remainder."""
-        u = self.flow_velocity()
-        f = self.frame(displacement)
-        r = f.norm(dim=-1, keepdim=True)
-        at_start = r < 1e-12
-        e_r = torch.where(at_start, self.body.heading(self.orientation),
-                          f / torch.where(at_start, torch.ones_like(r), r))
-        u_r = (u * e_r).sum(-1, keepdim=True)
-        u_perp = (u - u_r * e_r).norm(dim=-1, keepdim=True)
-        return torch.cat((u_r, u_perp), -1) / self.swim_speed
 
     def stagger(self, groups: int) -> None:
         """Offset the episodes of ``groups`` groups of flows (flow ``f`` in group ``f mod
@@ -320,8 +292,9 @@ class SwimmerEnv(EnvBase):
         if self.task.vertical:
             out["rise"] = vertical.rise(disp, self.body.vertical_axis).unsqueeze(-1)
         if self.critic_flow:
-            out["critic_observation"] = torch.cat(
-                (out["observation"], self.flow_features(disp)), -1)
+            flow = features.flow_features(self.flow_velocity(), self.body.heading(
+                self.orientation), self.frame(disp), self.swim_speed)
+            out["critic_observation"] = torch.cat((out["observation"], flow), -1)
         if self.task.target:
             arrived = self.arrived.unsqueeze(-1)
             out.update(target_distance=(self.target - disp).norm(dim=-1, keepdim=True),
@@ -443,9 +416,9 @@ class SwimmerEnv(EnvBase):
         if direction is not None:
             self.body.steer(direction)
         if self.task.target:
-            return self._step_target(action)
+            return step_target(self, action)
         disp = self.displacement()
-        aligned = self._swim_alignment(disp)
+        aligned = self.swim_alignment(disp)
         before = self._progress(disp)
         self.integrate(action)
         self.step_count += 1
@@ -457,7 +430,7 @@ class SwimmerEnv(EnvBase):
         if self.task.vertical:
             self.window.update(after, self.step_count)
         out = self._observe(disp)
-        aligned = 0.5 * (aligned + self._swim_alignment(disp))  # n_r over the decision
+        aligned = 0.5 * (aligned + self.swim_alignment(disp))  # n_r over the decision
         self.alignment += aligned / self.params.n_decisions
         if self.params.reward.progress == "swimming":  # v_s T_u (n_r(t_{i-1}) + n_r(t_i)) / 2
             reward = self.decision_length * aligned
@@ -466,41 +439,10 @@ class SwimmerEnv(EnvBase):
         out.set("reward", (reward if cost is None else reward - cost).unsqueeze(-1))
         return out
 
-    def _swim_alignment(self, displacement: torch.Tensor) -> torch.Tensor:
-        r"""$n_r = \boldsymbol n\cdot\boldsymbol e_r$, ``(F, S)``, $\boldsymbol e_r$ along the
-        task's :meth:`frame`; 1 where the frame vector vanishes (a swimmer at its start, where
-        the signals take $\boldsymbol e_r = \boldsymbol n$)."""
-        f = self.frame(displacement)
-        r = f.norm(dim=-1)
-        at_start = r < 1e-12
-        n_f = (self.body.heading(self.orientation) * f).sum(-1)
-        return torch.where(at_start, torch.ones_like(r),
-                           n_f / torch.where(at_start, torch.ones_like(r), r))
-
-    def _step_target(self, action: torch.Tensor) -> TensorDictBase:
-        """One decision of ``task=target``: arrived swimmers stay where they are (no motion,
-        reward or energy); ``r_i = rho(t_{i-1}) - rho(t_i)`` for the others, who arrive when
-        ``rho <= task.arrival_radius``."""
-        moving = ~self.arrived
-        rho_before = (self.target - self.displacement()).norm(dim=-1)
-        # the arrived swimmers' state put back after the interval, with no branch on whether
-        # there are any (a branch on a tensor value would wait for the device)
-        frozen = [x.clone() for x in self.state()]
-        self.integrate(action)
-        for x, old in zip(self.state(), frozen, strict=True):
-            keep = self.arrived.view(*self.batch_size, *([1] * (x.dim() - 2)))
-            x.copy_(torch.where(keep, old, x))
-        self.step_count += 1
-        self.flow_step += 1
-        rho = (self.target - self.displacement()).norm(dim=-1)
-        now = moving & (rho <= self.arrival_radius)
-        self.arrived |= now
-        self.arrival_step.copy_(torch.where(now, self.step_count, self.arrival_step))
-        cost = self._cost(action.view(self.batch_size), moving)
-        reward = torch.where(moving, rho_before - rho, torch.zeros_like(rho))
-        out = self._observe()
-        out.set("reward", (reward if cost is None else reward - cost).unsqueeze(-1))
-        return out
+    def swim_alignment(self, displacement: torch.Tensor) -> torch.Tensor:
+        """``n_r`` in the task's frame, ``(F, S)`` (:mod:`~swimrl.env.features`)."""
+        return features.radial_alignment(self.body.heading(self.orientation),
+                                         self.frame(displacement))
 
     def _cost(self, shape: torch.Tensor, moving: torch.Tensor) -> torch.Tensor | None:
         """Account the decision just taken (:func:`~swimrl.env.accounting.account`)."""

@@ -30,6 +30,7 @@ from torchrl.objectives.value import GAE
 from torchrl.record.loggers.tensorboard import TensorboardLogger
 
 from swimrl.env import EnvParams, SwimmerEnv, build_env
+from swimrl.env.features import observe_flow_for_critic
 from swimrl.flows.build import FlowSpec
 from swimrl.policies.networks import ModelSpec, actor_critic
 from swimrl.rl.plan import LossSettings, TrainConfig, TrainPlan, TrainSettings
@@ -57,11 +58,11 @@ def make_env(flow: FlowSpec, params: EnvParams, runtime: Runtime, train: TrainSe
     in ``train.stagger`` groups (:meth:`~swimrl.env.SwimmerEnv.stagger`), with the reward
     multiplied by ``train.reward_scale`` (None: :func:`auto_reward_scale` at ``loss.gamma``);
     with ``train.critic_flow`` its observations carry ``critic_observation``
-    (:meth:`~swimrl.env.SwimmerEnv.observe_flow_for_critic`)."""
+    (:func:`~swimrl.env.features.observe_flow_for_critic`)."""
     base = build_env(flow, params, runtime, train.n_flows, train.n_swimmers, seed,
                      stagger=train.stagger)
     if train.critic_flow:
-        base.observe_flow_for_critic()
+        observe_flow_for_critic(base)
     scale = train.reward_scale
     if scale is None:
         scale = auto_reward_scale(base, loss.gamma)
