@@ -137,8 +137,7 @@ class SwimmerEnv(EnvBase):
         self.energy = torch.zeros(batch, device=dev, dtype=dtype)
         #: ``C_hat`` so far: ``(1/T) sum_i |Lambda_i - Lambda_{i-1}| T_u`` (the shape change).
         self.shape_change = torch.zeros(batch, device=dev, dtype=dtype)
-        #: ``S_hat`` so far: ``(1/T) int n . e_r dt`` (trapezoid per decision), the swimmer's
-        #: own share of ``R_hat`` (``task=displacement``; :func:`~swimrl.env.accounting.outcomes`).
+        #: ``S_hat`` so far: ``(1/T) int n . e_r dt``, the swimmer's own share of ``R_hat``.
         self.alignment = torch.zeros(batch, device=dev, dtype=dtype)
         #: The previous decision's ``Lambda`` (NaN before the first; the shape-change cost).
         self.last_action = torch.full(batch, math.nan, device=dev, dtype=dtype)
@@ -168,8 +167,7 @@ class SwimmerEnv(EnvBase):
             self.observation_spec["rise"] = Unbounded(shape=batch + (1,), device=dev,
                                                       dtype=dtype)
         self.reward_spec = Unbounded(shape=batch + (1,), device=dev, dtype=dtype)
-        #: Whether the observations carry ``critic_observation``
-        #: (:func:`~swimrl.env.features.observe_flow_for_critic`).
+        #: Observations carry ``critic_observation`` (``features.observe_flow_for_critic``).
         self.critic_flow = False
         self.done_spec = Composite(
             done=Categorical(2, shape=batch + (1,), dtype=torch.bool, device=dev),
