@@ -494,3 +494,22 @@ def test_learner_ablation_asymmetric_critic_probe_is_the_record():
         run = f"cflow_terms_std02_const_ku10_seed{seed}"
         row = next(line for line in lines if f"]({run}/)" in line)
         assert row.endswith(f"| {got[(run, 'flows')]:.2f} | {got[(run, 'gaussian')]:.2f} |"), row
+
+
+def test_asymmetric_critic_test_flows_are_the_record():
+    """cflow_test_seed0/README.md: R̂, the ratio to STO and the paired difference to the rule
+    on the test flows, from the comparisons (STO's per-flow values equal the rule's record)."""
+    text = page("docs/results/learner_ablation/cflow_test_seed0/README.md")
+    rule = rows("optimised_rules/ku10_3d/test_seed0/comparison.json")
+    ref = rule["optimised(ku10_3d)"]
+    assert (f"| optimised rule `ku10_3d` | {ref['R_hat_mean']:.3f} ± {ref['R_hat_sem']:.3f} | "
+            f"{ref['ratio_to_first']:.3f} ± {ref['ratio_sem']:.3f} |") in text
+    for seed in (0, 1):
+        got = rows(f"learner_ablation/cflow_test_seed0/seed{seed}/comparison.json")
+        assert got["sto"]["per_flow"] == rule["sto"]["per_flow"]
+        p = next(r for label, r in got.items() if label.startswith("policy"))
+        d = np.subtract(p["per_flow"], ref["per_flow"])
+        diff = f"{d.mean():+.3f} ± {d.std(ddof=1) / np.sqrt(d.size):.3f}".replace("-", "−")
+        cells = (f"| {p['R_hat_mean']:.3f} ± {p['R_hat_sem']:.3f} | "
+                 f"{p['ratio_to_first']:.3f} ± {p['ratio_sem']:.3f} | {diff} |")
+        assert cells in text, cells
