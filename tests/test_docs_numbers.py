@@ -474,7 +474,7 @@ def test_learner_ablation_asymmetric_critic_is_the_record():
     def paired(d) -> str:
         return f"{d.mean():+.3f} ± {d.std(ddof=1) / np.sqrt(d.size):.3f}".replace("-", "−")
 
-    for seed in (0, 1):
+    for seed in (0, 1, 2):
         m = record(f"learner_ablation/cflow_terms_std02_const_ku10_seed{seed}/metrics.json")
         r, s = np.asarray(m["per_flow"]), np.asarray(m["swimming_per_flow"])
         ratio = r.sum() / np.sum(sto["per_flow"])
