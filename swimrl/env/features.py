@@ -4,7 +4,8 @@ velocity along and across the frame, which an asymmetric critic reads
 (``train.critic_flow``).
 
 The frame is the task's direction $\boldsymbol e_r$ (:meth:`~swimrl.env.SwimmerEnv.frame`),
-$\boldsymbol n$ where its vector vanishes (a swimmer at its start), as for the signals.
+$\boldsymbol n$ where its vector vanishes (a swimmer at its start), as for the signals
+(:func:`~swimrl.physics.body3d.radial_direction`, which holds in any dimension).
 """
 
 from __future__ import annotations
@@ -12,21 +13,12 @@ from __future__ import annotations
 import torch
 from torchrl.data import Unbounded
 
-#: A frame vector shorter than this has no direction (the start point).
-AT_START = 1e-12
-
-
-def radial_unit(n: torch.Tensor, frame: torch.Tensor) -> torch.Tensor:
-    r"""$\boldsymbol e_r = \boldsymbol f/|\boldsymbol f|$, and $\boldsymbol n$ where
-    $|\boldsymbol f| <$ :data:`AT_START`, ``(..., d)``."""
-    r = frame.norm(dim=-1, keepdim=True)
-    at_start = r < AT_START
-    return torch.where(at_start, n, frame / torch.where(at_start, torch.ones_like(r), r))
+from swimrl.physics.body3d import radial_direction
 
 
 def radial_alignment(n: torch.Tensor, frame: torch.Tensor) -> torch.Tensor:
     r"""$n_r = \boldsymbol n\cdot\boldsymbol e_r$, ``(...)`` (1 at the start point)."""
-    return (n * radial_unit(n, frame)).sum(-1)
+    return (n * radial_direction(n, frame)).sum(-1)
 
 
 def flow_features(u: torch.Tensor, n: torch.Tensor, frame: torch.Tensor,
@@ -34,7 +26,7 @@ def flow_features(u: torch.Tensor, n: torch.Tensor, frame: torch.Tensor,
     r"""$(u_r, u_\perp)/v_s$, ``(..., 2)``: the flow's velocity along $\boldsymbol e_r$,
     $u_r = \boldsymbol u\cdot\boldsymbol e_r$, and the size of the rest,
     $u_\perp = |\boldsymbol u - u_r\boldsymbol e_r|$, in units of the swimming speed."""
-    e_r = radial_unit(n, frame)
+    e_r = radial_direction(n, frame)
     u_r = (u * e_r).sum(-1, keepdim=True)
     return torch.cat((u_r, (u - u_r * e_r).norm(dim=-1, keepdim=True)), -1) / swim_speed
 
