@@ -295,6 +295,41 @@ def test_kill_and_resume_round_trip(train_cfg, tmp_path, monkeypatch):
     assert (tmp_path / "metrics.json").read_text() == before
 
 
+def test_constant_rate_run_extended_to_a_larger_budget(train_cfg, tmp_path):
+    """A finished constant-rate run, copied without its results and resumed with twice the
+    budget, ends with the weights of the longer run stopped at the same update and resumed
+    (nothing in a constant-rate run depends on its budget); with linear rates (whose schedule
+    depends on the budget), or a smaller budget, the change is refused."""
+    import shutil
+
+    short, extended, straight = tmp_path / "short", tmp_path / "extended", tmp_path / "straight"
+    train(train_cfg("optim.anneal=none", "train.total_frames=160", "train.eval_every=0"), short)
+    shutil.copytree(short, extended)
+    for name in ("metrics.json", "policy.pt"):
+        (extended / name).unlink()
+    longer = train_cfg("optim.anneal=none", "train.total_frames=320", "train.eval_every=0",
+                       "resume=true")
+    m = train(longer, extended)
+    assert m["training"]["updates"] == 4 and m["training"]["frames"] == 320
+    stopped = train_cfg("optim.anneal=none", "train.total_frames=320", "train.eval_every=0",
+                        "train.stop_after_updates=2")
+    assert train(stopped, straight) is None
+    train(longer, straight)
+    a, b = (load_file(RunLayout(d).checkpoint) for d in (extended, straight))
+    _assert_same(a["actor"], b["actor"])
+    _assert_same(a["critic"], b["critic"])
+    # a shorter budget, or a linear schedule, is a different training trajectory
+    linear = tmp_path / "linear"
+    train(train_cfg("optim.anneal=linear", "train.total_frames=160", "train.eval_every=0"),
+          linear)
+    (linear / "metrics.json").unlink()
+    with pytest.raises(ConfigError, match="train.total_frames: 160 -> 320"):
+        train(train_cfg("optim.anneal=linear", "train.total_frames=320", "resume=true"), linear)
+    (extended / "metrics.json").unlink()
+    with pytest.raises(ConfigError, match="train.total_frames: 320 -> 160"):
+        train(train_cfg("optim.anneal=none", "train.total_frames=160", "resume=true"), extended)
+
+
 def test_stop_after_updates_then_resume(train_cfg, tmp_path):
     import shutil
 

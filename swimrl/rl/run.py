@@ -15,8 +15,10 @@ Rules for the run directory (checked before any compute):
   ones continue, missing ones start;
 * a resumed run must have the same config as the checkpoint (whose renamed keys are first
   moved to their current names, :func:`~swimrl.runs.checkpoint.upgrade_config`), except for
-  the runtime keys in :data:`RESUME_FREE_KEYS` and the ``eval.*`` / periodic evaluation
-  sizes.
+  the runtime keys in :data:`RESUME_FREE_KEYS`, the ``eval.*`` / periodic evaluation
+  sizes and, for a constant-rate run (``optim.anneal=none``), a larger
+  ``train.total_frames`` (the run continues to the larger budget; to extend a finished run,
+  copy its directory without ``metrics.json`` and ``policy.pt`` and resume the copy).
 """
 
 from __future__ import annotations
@@ -53,11 +55,19 @@ RESUME_FREE_PREFIXES = ("eval.", "eval_flow.", "hydra.")
 
 
 def config_differences(old: dict, new: dict) -> list[str]:
-    """``key: old -> new`` for the keys that matter to the training trajectory."""
+    """``key: old -> new`` for the keys that matter to the training trajectory.
+
+    ``train.total_frames`` may grow when both configs keep the rates constant
+    (``optim.anneal=none``): no schedule depends on the budget then, so the frames already
+    trained are those of the longer run, and a run is continued to a larger budget."""
     a, b = flatten(old), flatten(new)
+    extendable = (a.get("optim.anneal") == b.get("optim.anneal") == "none"
+                  and b.get("train.total_frames", 0) >= a.get("train.total_frames", 0))
     diffs = []
     for key in sorted(set(a) | set(b)):
         if key in RESUME_FREE_KEYS or key.startswith(RESUME_FREE_PREFIXES):
+            continue
+        if key == "train.total_frames" and extendable:
             continue
         if a.get(key, "<missing>") != b.get(key, "<missing>"):
             diffs.append(f"{key}: {a.get(key, '<missing>')!r} -> {b.get(key, '<missing>')!r}")
