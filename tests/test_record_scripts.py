@@ -113,3 +113,29 @@ def test_noisy_rule_script_runs_at_a_tiny_size(tmp_path):
     assert [r["sigma"] for r in rows] == [0, 0, 0.5]
     assert rows[0]["R_hat_mean"] == rows[1]["R_hat_mean"] > 0
     assert rows[2]["R_hat_mean"] != rows[0]["R_hat_mean"]
+
+
+def test_pair_with_rule_reproduces_the_asymmetric_critic_test_table(tmp_path):
+    """critic3d/pair_with_rule.py on the committed test-flow records gives the numbers of
+    learner_ablation/cflow_test_seed0/README.md (× STO and policy − rule, per seed)."""
+    import re
+
+    results = ROOT / "docs" / "results"
+    tests = results / "learner_ablation" / "cflow_test_seed0"
+    out = tmp_path / "pair.json"
+    subprocess.run([sys.executable, str(results / "critic3d" / "pair_with_rule.py"),
+                    str(results / "optimised_rules" / "ku10_3d" / "test_seed0" / "comparison.json"),
+                    "optimised(ku10_3d)",
+                    *(str(tests / f"seed{s}" / "comparison.json") for s in range(3)),
+                    "--json", str(out)], check=True, cwd=ROOT, capture_output=True)
+    pairs = json.loads(out.read_text())
+    table = (tests / "README.md").read_text()
+    for s in range(3):
+        row = re.search(rf"\| \[seed {s}\]\(seed{s}/comparison.md\) \| ([0-9.]+) ± [0-9.]+ \| "
+                        rf"([0-9.]+) ± [0-9.]+ \| ([−+-][0-9.]+) ± ([0-9.]+) \|", table)
+        label = f"policy(docs/results/learner_ablation/cflow_terms_std02_const_ku10_seed{s})"
+        p = pairs["policies"][label]
+        assert f"{p['R_hat']:.3f}" == row[1] and f"{p['ratio_to_sto'][0]:.3f}" == row[2]
+        assert f"{p['minus_rule'][0]:+.3f}" == row[3].replace("−", "-")
+        assert f"{p['minus_rule'][1]:.3f}" == row[4]
+    assert f"{pairs['rule']['ratio_to_sto'][0]:.3f}" == "1.150"
