@@ -479,12 +479,12 @@ def test_long_floor_preset_is_long_with_a_sigma_bound():
 
 def test_critic3d_preset_is_the_ablations_asymmetric_critic_arm():
     """``train_preset=critic3d`` composes exactly the overrides the learner ablation's
-    asymmetric-critic runs used on ``wide3d``, so its records are the preset's; a signals
-    set on the command line still wins."""
+    asymmetric-critic runs used on ``wide3d`` (continued to 1e8 frames), so its records are
+    the preset's; a signals set on the command line still wins."""
     from hydra import compose, initialize_config_module
 
     arm = ["train_preset=wide3d", "signals=rule_terms", "model.min_std=0.2",
-           "optim.anneal=none", "train.critic_flow=true", "train.total_frames=30000000",
+           "optim.anneal=none", "train.critic_flow=true", "train.total_frames=100000000",
            "train.eval_every=61"]
     base = ["flow=stochastic3d", "flow.kubo=10"]
     with initialize_config_module("swimrl.conf", version_base="1.3"):
@@ -496,7 +496,7 @@ def test_critic3d_preset_is_the_ablations_asymmetric_critic_arm():
     assert train_config(preset).record == train_config(ablation).record
     assert train_config(preset).train.critic_flow and not train_config(wide3d).train.critic_flow
     assert train_config(other).spec.params.signals != train_config(preset).spec.params.signals
-    assert validate_train_cfg(preset).n_updates == 457
+    assert validate_train_cfg(preset).n_updates == 1525
 
 
 @pytest.mark.slow  # two DNS runs, then PPO on one, evaluated on the other (~11-17 s)
