@@ -513,3 +513,47 @@ def test_asymmetric_critic_test_flows_are_the_record():
         cells = (f"| {p['R_hat_mean']:.3f} ± {p['R_hat_sem']:.3f} | "
                  f"{p['ratio_to_first']:.3f} ± {p['ratio_sem']:.3f} | {diff} |")
         assert cells in text, cells
+
+
+def test_critic3d_test_flows_are_the_record():
+    """critic3d/README.md: every policy's R̂ ± SEM, ratio to STO and paired difference to the
+    rule on the test flows, from its comparison paired with the rule's record (Ku = 10, 1)."""
+    from swimrl.evaluation.statistics import paired_ratio
+
+    text = page("docs/results/critic3d/README.md")
+    checked = 0
+    for ku, tests in ((10, "ku10_1e8_test_seed0"), (1, "ku1_test_seed0")):
+        rule = rows(f"optimised_rules/ku{ku}_3d/test_seed0/comparison.json")
+        sto, ref = (np.asarray(rule[k]["per_flow"]) for k in ("sto", f"optimised(ku{ku}_3d)"))
+        ratio, sem = paired_ratio(ref, sto)
+        assert f"| {ref.mean():.3f} ± {rule[f'optimised(ku{ku}_3d)']['R_hat_sem']:.3f} | " \
+               f"{ratio:.3f} ± {sem:.3f} |" in text
+        for path in sorted((RESULTS / "critic3d" / tests).rglob("comparison.json")):
+            for label, r in rows(str(path.relative_to(RESULTS))).items():
+                p = np.asarray(r["per_flow"])
+                ratio, sem = paired_ratio(p, sto)
+                d = p - ref
+                diff = f"{d.mean():+.3f} ± {d.std(ddof=1) / np.sqrt(d.size):.3f}".replace("-", "−")
+                cells = (f"| {p.mean():.3f} ± {r['R_hat_sem']:.3f} | {ratio:.3f} ± {sem:.3f} | "
+                         f"{diff} |")
+                assert cells in text, (label, cells)
+                checked += 1
+    assert checked >= 3
+
+
+def test_critic3d_probe_is_the_record():
+    """critic3d/README.md: corr(Λ, Λ*) on real-flow / isotropic states of the 1e8 policies
+    (each row's last cell), from probe_ku10/probe.json and probe_ku1/probe.json."""
+    lines = (RESULTS / "critic3d" / "README.md").read_text(encoding="utf-8").splitlines()
+    for probe, runs, prefix in (
+            ("probe_ku10", {0: "ku10_1e8_test_seed0/seeds01/", 1: "ku10_1e8_test_seed0/seeds01/",
+                            2: "ku10_1e8_test_seed0/seed2/"},
+             "learner_ablation/cflow1e8_terms_std02_const_ku10_seed"),
+            ("probe_ku1", {0: "ku1_test_seed0/"}, "critic3d/ku1_1e8_seed")):
+        got = {(r["policy"].rstrip("/").rsplit("/", 1)[-1], r["states"]): r["corr_star"]
+               for r in record(f"critic3d/{probe}/probe.json")["rows"]}
+        for seed, link in runs.items():
+            run = (prefix + str(seed)).rsplit("/", 1)[-1]
+            row = next(line for line in lines if line.startswith(f"| [seed {seed}]({link}"))
+            want = f"| {got[(run, 'flows')]:.2f} / {got[(run, 'gaussian')]:.2f} |"
+            assert row.endswith(want), (row, want)
