@@ -557,3 +557,15 @@ def test_critic3d_probe_is_the_record():
             row = next(line for line in lines if line.startswith(f"| [seed {seed}]({link}"))
             want = f"| {got[(run, 'flows')]:.2f} / {got[(run, 'gaussian')]:.2f} |"
             assert row.endswith(want), (row, want)
+
+
+def test_critic3d_snapshot_selection_is_the_record():
+    """critic3d/selection_seed2000000/README.md: each seed's row of the five snapshots'
+    validation R̂ ± SEM, in the order of its comparison."""
+    text = page("docs/results/critic3d/selection_seed2000000/README.md")
+    for seed in (0, 1, 2):
+        got = record(f"critic3d/selection_seed2000000/seed{seed}/comparison.json")["rows"]
+        assert [r["label"].rsplit("_", 1)[-1] for r in got] == [
+            "83951616.pt)", "87949312.pt)", "91947008.pt)", "95944704.pt)", "99942400.pt)"]
+        cells = " | ".join(f"{r['R_hat_mean']:.3f} ± {r['R_hat_sem']:.3f}" for r in got)
+        assert f"| {seed} | {cells} |" in text, cells
