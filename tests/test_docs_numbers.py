@@ -57,6 +57,12 @@ def paired_sem(a, b) -> tuple[float, float]:
     return float(d.mean()), float(d.std(ddof=1) / np.sqrt(d.size))
 
 
+def paired_cell(a, b) -> str:
+    """``<a - b> ± SEM`` over flows as a table cell: signed, three decimals, a true minus."""
+    mean, sem = paired_sem(a, b)
+    return f"{signed(mean, '.3f')} ± {sem:.3f}"
+
+
 # -- point-to-point navigation (docs/beyond/target.md) -----------------------------------------
 TARGET = "docs/beyond/target.md"
 KUS = {"10": "10", "1e7": "1e7"}
@@ -442,10 +448,6 @@ def test_learner_ablation_gain_split_is_the_record():
     def fmt(v: float, signed: bool = False) -> str:
         return (f"{v:+.3f}" if signed else f"{v:.3f}").replace("-", "−")
 
-    def paired(a, b) -> str:
-        d = np.asarray(a) - np.asarray(b)
-        return f"{fmt(d.mean(), True)} ± {d.std(ddof=1) / np.sqrt(d.size):.3f}"
-
     for dim, rule in (("3d", "optimised(ku10_3d)"), ("2d", "optimised(ku10_2d)")):
         got = rows(f"learner_ablation/gain_split_{dim}/comparison.json")
 
@@ -459,7 +461,7 @@ def test_learner_ablation_gain_split_is_the_record():
             cells = (f"| {fmt(np.mean(p[0]))} | {fmt(np.mean(p[1]))} | "
                      f"{fmt(np.mean(p[2]), True)} | ")
             if label != rule:
-                cells += " | ".join(paired(a, b) for a, b in zip(ref, p, strict=True)) + " |"
+                cells += " | ".join(paired_cell(a, b) for a, b in zip(ref, p, strict=True)) + " |"
             assert cells in text, (label, cells)
 
 
@@ -471,16 +473,13 @@ def test_learner_ablation_asymmetric_critic_is_the_record():
     rule, sto = got["optimised(ku10_3d)"], got["sto"]
     ref = np.asarray(rule["per_flow"]), np.asarray(rule["swimming_per_flow"])
 
-    def paired(d) -> str:
-        return f"{d.mean():+.3f} ± {d.std(ddof=1) / np.sqrt(d.size):.3f}".replace("-", "−")
-
     for seed in (0, 1, 2):
         m = record(f"learner_ablation/cflow_terms_std02_const_ku10_seed{seed}/metrics.json")
         r, s = np.asarray(m["per_flow"]), np.asarray(m["swimming_per_flow"])
         ratio = r.sum() / np.sum(sto["per_flow"])
         cells = (f"| {seed} | {m['R_hat_mean']:.3f} ± {m['R_hat_sem']:.3f} | {ratio:.3f} | "
-                 f"{paired(ref[0] - r)} | {paired(ref[1] - s)} | "
-                 f"{paired((ref[0] - ref[1]) - (r - s))} |")
+                 f"{paired_cell(ref[0], r)} | {paired_cell(ref[1], s)} | "
+                 f"{paired_cell(ref[0] - ref[1], r - s)} |")
         assert cells in text, cells
 
 
@@ -508,8 +507,7 @@ def test_asymmetric_critic_test_flows_are_the_record():
         got = rows(f"learner_ablation/cflow_test_seed0/seed{seed}/comparison.json")
         assert got["sto"]["per_flow"] == rule["sto"]["per_flow"]
         p = next(r for label, r in got.items() if label.startswith("policy"))
-        d = np.subtract(p["per_flow"], ref["per_flow"])
-        diff = f"{d.mean():+.3f} ± {d.std(ddof=1) / np.sqrt(d.size):.3f}".replace("-", "−")
+        diff = paired_cell(p["per_flow"], ref["per_flow"])
         cells = (f"| {p['R_hat_mean']:.3f} ± {p['R_hat_sem']:.3f} | "
                  f"{p['ratio_to_first']:.3f} ± {p['ratio_sem']:.3f} | {diff} |")
         assert cells in text, cells
@@ -532,8 +530,7 @@ def test_critic3d_test_flows_are_the_record():
             for label, r in rows(str(path.relative_to(RESULTS))).items():
                 p = np.asarray(r["per_flow"])
                 ratio, sem = paired_ratio(p, sto)
-                d = p - ref
-                diff = f"{d.mean():+.3f} ± {d.std(ddof=1) / np.sqrt(d.size):.3f}".replace("-", "−")
+                diff = paired_cell(p, ref)
                 cells = (f"| {p.mean():.3f} ± {r['R_hat_sem']:.3f} | {ratio:.3f} ± {sem:.3f} | "
                          f"{diff} |")
                 assert cells in text, (label, cells)

@@ -15,22 +15,15 @@ from __future__ import annotations
 
 import argparse
 import json
-import math
 from pathlib import Path
 
 import numpy as np
 
-from swimrl.evaluation.statistics import paired_ratio
+from swimrl.evaluation.statistics import mean_std_sem, paired_difference, paired_ratio
 
 
 def rows(path: Path) -> dict[str, dict]:
     return {r["label"]: r for r in json.loads(Path(path).read_text())["rows"]}
-
-
-def paired_difference(a: np.ndarray, b: np.ndarray) -> tuple[float, float]:
-    """Mean of ``a − b`` over paired flows and its SEM."""
-    d = a - b
-    return float(d.mean()), float(d.std(ddof=1) / math.sqrt(d.size))
 
 
 def main() -> None:
@@ -45,7 +38,7 @@ def main() -> None:
     rule = np.asarray(ref[args.rule_label]["per_flow"])
     out = {"sto": float(sto.mean()), "rule": {"label": args.rule_label,
            "R_hat": float(rule.mean()), "ratio_to_sto": paired_ratio(rule, sto)}, "policies": {}}
-    rule_sem = rule.std(ddof=1) / math.sqrt(rule.size)
+    rule_sem = mean_std_sem(rule)[2]
     r_rule, r_rule_sem = out["rule"]["ratio_to_sto"]
     lines = ["| strategy | R̂ | × STO (paired) | R̂: policy − rule (paired) |", "|---|---|---|---|",
              f"| {args.rule_label} | {rule.mean():.3f} ± {rule_sem:.3f}"
